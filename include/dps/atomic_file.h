@@ -1,0 +1,44 @@
+// dps — files written so that a crash or a kill never leaves a half-written file under its final
+// name (DESIGN.md §4): everything is written to a temporary name beside the target and renamed
+// when complete.
+#pragma once
+
+#include <fstream>
+#include <string>
+
+namespace dps {
+
+// A temporary path beside `path` (same folder, so that the rename is atomic) that keeps the
+// extension of `path`, so that writers that choose a format by extension (cv::imwrite,
+// cv::VideoWriter) still work: "out/map.png" -> "out/.map.png.tmp-<pid>-<n>.png".
+std::string TemporaryPathFor(const std::string& path);
+
+// Renames `from` to `to`, replacing `to`; throws dps::Error naming both on failure.
+void RenameReplacing(const std::string& from, const std::string& to);
+
+// Writes `content` to `path` atomically; throws dps::Error naming the file on failure.
+void WriteFileAtomically(const std::string& path, const std::string& content);
+
+// A text output stream that becomes visible under its final name only on Commit(). Destroying an
+// uncommitted file removes the temporary.
+class AtomicOutputFile {
+ public:
+  // Opens a temporary file beside `path`; throws dps::Error when it cannot be created.
+  explicit AtomicOutputFile(const std::string& path);
+  ~AtomicOutputFile();
+  AtomicOutputFile(const AtomicOutputFile&) = delete;
+  AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
+
+  std::ostream& stream() { return out_; }
+  // Flushes, closes and renames to the final path; throws dps::Error on any write failure.
+  void Commit();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::string tmp_path_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
+
+}  // namespace dps
