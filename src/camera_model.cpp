@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -224,6 +225,24 @@ CameraModel UnifiedToHyperbolic(const CameraModel& u, double a) {
   }
   const Eigen::Matrix3d K = u.K() * Eigen::Vector3d(a, a, 1.0).asDiagonal();
   return CameraModel::Hyperbolic(u.width(), u.height(), K, a, u.xi() * a, u.rim_radius_px());
+}
+
+CameraModel ResizeCameraModel(const CameraModel& m, int width, int height) {
+  const double sx = static_cast<double>(width) / m.width();
+  const double sy = static_cast<double>(height) / m.height();
+  Eigen::Matrix3d K = m.K();
+  K.row(0) *= sx;
+  K.row(1) *= sy;
+  K(0, 2) += 0.5 * (sx - 1.0);
+  K(1, 2) += 0.5 * (sy - 1.0);
+  K(2, 2) = 1.0;
+  const double rim = m.rim_radius_px() * std::min(sx, sy);
+  switch (m.type()) {
+    case CameraModelType::kHyperbolic: return CameraModel::Hyperbolic(width, height, K, m.a(), m.b(), rim);
+    case CameraModelType::kUnified: return CameraModel::Unified(width, height, K, m.xi(), rim);
+    case CameraModelType::kFisheye: return CameraModel::Fisheye(width, height, K, m.dist(), rim);
+  }
+  throw std::invalid_argument("ResizeCameraModel: unknown model type");
 }
 
 Eigen::Vector3d PaperEq4Ray(const CameraModel& model, const Eigen::Vector2d& pixel) {

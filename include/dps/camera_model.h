@@ -109,6 +109,10 @@ CameraModel HyperbolicToUnified(const CameraModel& hyperbolic);
 // b = xi a, K = K' diag(a, a, 1). Throws std::invalid_argument for a model of another type.
 CameraModel UnifiedToHyperbolic(const CameraModel& unified, double a);
 
+// The same model for images resized to width x height: K is scaled about the pixel grid
+// (u' + 0.5 = s (u + 0.5)), the rim by the smaller of the two scales.
+CameraModel ResizeCameraModel(const CameraModel& model, int width, int height);
+
 // The paper's own inverse, eq. 4, for a hyperbolic (or unified) model:
 // p = [u', v', a - b sqrt(u'^2 + v'^2 + 1)] with [u' v' 1]^T = K^-1 [u v 1]^T, normalised.
 // Exact only when a^2 - b^2 = 1; kept to document and test that special case.

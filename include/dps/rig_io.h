@@ -21,6 +21,10 @@ namespace dps {
 // non-positive focal length or image size, duplicate camera name, ...).
 Rig ReadRig(const std::string& path);
 
+// Parses a rig from a node holding rig.yaml's fields (`vehicle`, `cameras`), e.g. a rig written
+// inline in a scene file; `where` prefixes every error message (the file, and the key).
+Rig ParseRig(const cv::FileNode& node, const std::string& where);
+
 // The rig as rig.yaml text (cv::FileStorage YAML). Doubles are written with 17 significant
 // digits, so ReadRig(WriteRig(rig)) reproduces the rig exactly.
 std::string RigToYaml(const Rig& rig);

@@ -1,0 +1,91 @@
+// dps tools — a small command-line parser shared by the tools (no third-party library).
+//
+// Options are `--name value` or `--name=value`; flags are `--name`; everything else is
+// positional. Unknown options are errors. Tools print `Usage()` for --help.
+#pragma once
+
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "dps/error.h"
+
+namespace dps_cli {
+
+class Args {
+ public:
+  // `with_value`: options that take a value; `flags`: options that do not.
+  Args(int argc, char** argv, const std::set<std::string>& with_value,
+       const std::set<std::string>& flags) {
+    for (int i = 1; i < argc; ++i) {
+      std::string a = argv[i];
+      if (a.rfind("--", 0) != 0 || a == "--") {
+        positional_.push_back(a);
+        continue;
+      }
+      std::string name = a.substr(2), value;
+      const size_t eq = name.find('=');
+      const bool inline_value = eq != std::string::npos;
+      if (inline_value) {
+        value = name.substr(eq + 1);
+        name = name.substr(0, eq);
+      }
+      if (name == "help" || name == "h") {
+        help_ = true;
+      } else if (flags.count(name)) {
+        if (inline_value) throw dps::Error("option --" + name + " takes no value");
+        values_[name] = "1";
+      } else if (with_value.count(name)) {
+        if (!inline_value) {
+          if (i + 1 >= argc) throw dps::Error("option --" + name + " needs a value");
+          value = argv[++i];
+        }
+        values_[name] = value;
+      } else {
+        throw dps::Error("unknown option --" + name + " (see --help)");
+      }
+    }
+  }
+
+  bool help() const { return help_; }
+  bool Has(const std::string& name) const { return values_.count(name) > 0; }
+  std::string Get(const std::string& name, const std::string& fallback = "") const {
+    const auto it = values_.find(name);
+    return it == values_.end() ? fallback : it->second;
+  }
+  double Number(const std::string& name, double fallback) const {
+    if (!Has(name)) return fallback;
+    char* end = nullptr;
+    const std::string v = Get(name);
+    const double d = std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0') throw dps::Error("option --" + name + ": expected a number, got '" + v + "'");
+    return d;
+  }
+  int Integer(const std::string& name, int fallback) const {
+    const double d = Number(name, fallback);
+    if (d != static_cast<int>(d)) throw dps::Error("option --" + name + ": expected an integer");
+    return static_cast<int>(d);
+  }
+  const std::vector<std::string>& positional() const { return positional_; }
+
+ private:
+  bool help_ = false;
+  std::map<std::string, std::string> values_;
+  std::vector<std::string> positional_;
+};
+
+// Runs a tool's body, printing any error as one line "tool: error: message" and returning 1.
+template <typename Body>
+int Run(const char* tool, Body&& body) {
+  try {
+    return body();
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": error: " << e.what() << std::endl;
+    return 1;
+  }
+}
+
+}  // namespace dps_cli
