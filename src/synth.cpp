@@ -128,7 +128,7 @@ std::vector<Mark> SampleMarks(const SceneRenderer& renderer, const FrameState& s
         const double dist = (p - cam.vehicle_from_camera.t).norm();
         if (hit.id != expected_id) continue;
         if (axis != 'Y' && std::abs(hit.distance_m - dist) > 0.02 * dist) continue;
-        found.push_back({cam.name, line, axis, px.x(), px.y()});
+        found.push_back({cam.name, line, axis, px.x(), px.y(), 0});
       }
       if (found.size() < 3) return;
       for (Mark& m : found) {
@@ -232,12 +232,8 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
         }
       }
       if (calibration && f == 0) {
-        AtomicOutputFile marks((tmp / "marks.csv").string());
-        marks.stream() << "camera,line,axis,u,v\n";
-        for (const Mark& m : SampleMarks(renderer, state, scene.calibration.mark_noise_px)) {
-          marks.stream() << m.camera << "," << m.line << "," << m.axis << "," << m.u << "," << m.v << "\n";
-        }
-        marks.Commit();
+        WriteMarks(SampleMarks(renderer, state, scene.calibration.mark_noise_px),
+                   (tmp / "marks.csv").string());
       }
       if (options.progress) options.progress(f + 1, frames);
     }

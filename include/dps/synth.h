@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "dps/marks_io.h"
 #include "dps/scene.h"
 #include "dps/scene_renderer.h"
 
@@ -32,14 +33,6 @@ struct TruthRow {
 
 // The truth rows of every object at one instant.
 std::vector<TruthRow> TruthAt(const FrameState& state, int frame);
-
-// One row of marks.csv (DESIGN.md §3.3).
-struct Mark {
-  std::string camera;
-  int line = 0;    // groups the points of one straight world line
-  char axis = 'Z'; // X, Y or Z: the vehicle axis the line is parallel to
-  double u = 0.0, v = 0.0;
-};
 
 // Points sampled along the painted lines (axes X and Z) and the poles (Y, their vertical axis)
 // that the camera sees unoccluded, at least `margin_px` inside the image and the rim, every

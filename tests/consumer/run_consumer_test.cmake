@@ -12,7 +12,7 @@ function(run)
 endfunction()
 
 run(${CMAKE_COMMAND} --install "${DPS_BUILD_DIR}" --prefix "${prefix}")
-foreach(tool dps-synth)
+foreach(tool dps-synth dps-calibrate)
   if(NOT EXISTS "${prefix}/bin/${tool}")
     message(FATAL_ERROR "the install has no ${prefix}/bin/${tool}")
   endif()
