@@ -1,0 +1,98 @@
+// dps — area-correlation stereo on rectified pairs (Gandhi & Trivedi 2006, section V, steps 1-4).
+//
+// Conventions
+// - Input: a rectified pair of 8-bit grey images of the same size. The left image is the
+//   reference: left(x, y) matches right(x - d, y) for disparity d (Middlebury / KITTI). For motion
+//   stereo the "left" image is the earlier side view (see virtual_view.h) and d may be negative.
+// - Output: CV_32F disparity in pixels (sub-pixel), one per left pixel; pixels without a reliable
+//   match hold kInvalidDisparity (+infinity): test with std::isfinite.
+//
+// Steps
+// 1. Laplacian-of-Gaussian band-pass prefilter (eq. 12): Gaussian of sigma log_sigma_px, then the
+//    3x3 Laplacian (in floating point), times prefilter_gain, clamped to +-prefilter_cap and
+//    offset to 0..2 cap (8-bit); it removes brightness differences between the cameras and keeps
+//    texture.
+// 2. Sum of absolute differences over a block_width x block_height window (eq. 13) for every
+//    disparity in [min_disparity, min_disparity + num_disparities), with running sums down the
+//    columns and along the row, so the cost per pixel and disparity does not grow with the window;
+//    OpenCV universal intrinsics over the disparities, cv::parallel_for_ over stripes of rows.
+// 3. The best disparity, refined to sub-pixel by a V (equiangular) fit to its neighbours' costs; an
+//    interest operator (the window's mean |LoG| must reach texture_threshold) rejects uniform
+//    areas; a uniqueness test rejects ambiguous minima; a left-right check compares with the best
+//    match seen from the right image.
+// 4. Two levels: the same search on half-resolution images fills pixels the full-resolution level
+//    left invalid (low texture), with twice the coarse disparity.
+// Temporal consistency (the paper's variance check over frames) is the separate, stateful
+// TemporalConsistencyFilter below.
+#pragma once
+
+#include <limits>
+
+#include <opencv2/core.hpp>
+
+namespace dps {
+
+// The value of pixels without a reliable disparity.
+constexpr float kInvalidDisparity = std::numeric_limits<float>::infinity();
+
+struct StereoOptions {
+  int min_disparity = 0;        // smallest disparity searched, px; negative for motion stereo
+  int num_disparities = 64;     // number of disparities searched, >= 2
+  int block_width = 9;          // SAD window, px; odd, 3..31
+  int block_height = 9;         // odd, 3..31
+  double log_sigma_px = 1.0;    // Gaussian of the LoG prefilter, px; > 0
+  double prefilter_gain = 6.0;  // LoG response scale before the clamp (grey levels), > 0
+  int prefilter_cap = 31;       // clamp of the scaled LoG response, 1..63
+  double texture_threshold = 1.0;  // interest operator: min mean |clamped LoG| in the window, >= 0
+  double uniqueness_ratio = 10.0;  // % by which the best cost must beat any non-adjacent one, 0..100
+  bool left_right_check = true;    // reject pixels whose right-image match disagrees
+  double left_right_max_diff = 1.0;  // px, >= 0
+  bool two_levels = true;          // fill invalid pixels from a half-resolution level
+  bool subpixel = true;            // equiangular (V) refinement
+
+  // Throws dps::Error naming the field, its value and the violated constraint.
+  void Check() const;
+};
+
+// The LoG band-pass prefilter of step 1: CV_8U in, CV_8U out with values 0..2 cap (cap = 0 LoG).
+cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap);
+
+// The matcher; holds nothing between calls but its options (thread-safe for const use).
+class SadStereoMatcher {
+ public:
+  explicit SadStereoMatcher(const StereoOptions& options);  // checks the options
+
+  // Disparity of `left` (reference) against `right`: CV_8U or CV_8UC3 (converted to grey), same
+  // size, at least block size + num_disparities wide. Throws dps::Error for bad inputs.
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) const;
+
+  const StereoOptions& options() const { return options_; }
+
+ private:
+  cv::Mat ComputeLevel(const cv::Mat& left_grey, const cv::Mat& right_grey, int min_disparity,
+                       int num_disparities) const;
+  StereoOptions options_;
+};
+
+// The paper's temporal consistency check: a running mean and variance of each pixel's disparity
+// over frames (exponential forgetting); pixels whose variance exceeds max_variance_px2 are
+// suppressed. A pixel that turns invalid resets.
+class TemporalConsistencyFilter {
+ public:
+  // forgetting in (0, 1]: weight of the newest frame; max_variance_px2 > 0.
+  TemporalConsistencyFilter(double forgetting = 0.5, double max_variance_px2 = 1.0);
+
+  // Feeds one frame's disparity (CV_32F, kInvalidDisparity for none) and returns it with the
+  // temporally inconsistent pixels set to kInvalidDisparity. Sizes must not change between calls
+  // (call Reset first).
+  cv::Mat Apply(const cv::Mat& disparity);
+  void Reset();
+
+ private:
+  double forgetting_;
+  double max_variance_;
+  cv::Mat mean_, var_;  // CV_32F
+  cv::Mat count_;       // CV_8U frames seen in a row, saturating
+};
+
+}  // namespace dps
