@@ -27,6 +27,7 @@
 #pragma once
 
 #include <limits>
+#include <memory>
 
 #include <opencv2/core.hpp>
 
@@ -57,21 +58,27 @@ struct StereoOptions {
 // The LoG band-pass prefilter of step 1: CV_8U in, CV_8U out with values 0..2 cap (cap = 0 LoG).
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap);
 
-// The matcher; holds nothing between calls but its options (thread-safe for const use).
+// The matcher. It keeps its working buffers between calls (fresh buffers would cost as much as
+// a good part of the matching), so use one matcher per thread.
 class SadStereoMatcher {
  public:
   explicit SadStereoMatcher(const StereoOptions& options);  // checks the options
+  ~SadStereoMatcher();
+  SadStereoMatcher(const SadStereoMatcher&) = delete;
+  SadStereoMatcher& operator=(const SadStereoMatcher&) = delete;
 
   // Disparity of `left` (reference) against `right`: CV_8U or CV_8UC3 (converted to grey), same
   // size, at least block size + num_disparities wide. Throws dps::Error for bad inputs.
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) const;
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right);
 
   const StereoOptions& options() const { return options_; }
 
  private:
-  cv::Mat ComputeLevel(const cv::Mat& left_grey, const cv::Mat& right_grey, int min_disparity,
-                       int num_disparities) const;
+  struct Workspace;
+  const cv::Mat& ComputeLevel(const cv::Mat& left_grey, const cv::Mat& right_grey,
+                              int min_disparity, int num_disparities, int level);
   StereoOptions options_;
+  std::unique_ptr<Workspace> ws_;
 };
 
 // The paper's temporal consistency check: a running mean and variance of each pixel's disparity

@@ -1,0 +1,73 @@
+// dps-bench: times dps's stereo matcher against cv::StereoBM on the same pairs in the same run
+// (same disparity range and block size), with and without the left-right check, and the virtual
+// view rectification. Prints a Markdown table for docs/performance.md.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "dps/sad_stereo.h"
+
+namespace {
+
+// Median wall time of `runs` calls, milliseconds (after one warm-up call).
+double MedianMs(int runs, const std::function<void()>& f) {
+  f();
+  std::vector<double> t;
+  for (int i = 0; i < runs; ++i) {
+    const auto a = std::chrono::steady_clock::now();
+    f();
+    t.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string data = argc > 1 ? argv[1] : "data/real";
+  if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::printf("usage: dps-bench [DATA_DIR]   (DATA_DIR holds kitti_pair/; default data/real)\n");
+    return 0;
+  }
+  const cv::Mat left = cv::imread(data + "/kitti_pair/imgKittyl.bmp", cv::IMREAD_GRAYSCALE);
+  const cv::Mat right = cv::imread(data + "/kitti_pair/imgKitty.bmp", cv::IMREAD_GRAYSCALE);
+  if (left.empty() || right.empty()) {
+    std::fprintf(stderr, "dps-bench: error: cannot read %s/kitti_pair/imgKitty[l].bmp\n", data.c_str());
+    return 1;
+  }
+  const int runs = 15;
+  std::printf("OpenCV %s, %d threads, %u hardware threads; median of %d runs\n\n", CV_VERSION,
+              cv::getNumThreads(), std::thread::hardware_concurrency(), runs);
+  std::printf("| size | D | block | LR check | dps ms | StereoBM ms | ratio dps/BM |\n");
+  std::printf("| --- | --- | --- | --- | --- | --- | --- |\n");
+  struct Case { int w, h, d; };
+  for (const Case c : {Case{320, 240, 64}, Case{640, 480, 64}, Case{1024, 768, 128}}) {
+    cv::Mat l, r;
+    cv::resize(left, l, cv::Size(c.w, c.h), 0, 0, cv::INTER_AREA);
+    cv::resize(right, r, cv::Size(c.w, c.h), 0, 0, cv::INTER_AREA);
+    for (const bool lr : {false, true}) {
+      dps::StereoOptions o;
+      o.num_disparities = c.d;
+      o.left_right_check = lr;
+      dps::SadStereoMatcher matcher(o);
+      const double dps_ms = MedianMs(runs, [&] { matcher.Compute(l, r); });
+      auto bm = cv::StereoBM::create(c.d, 9);
+      bm->setDisp12MaxDiff(lr ? 1 : -1);
+      cv::Mat out;
+      const double bm_ms = MedianMs(runs, [&] { bm->compute(l, r, out); });
+      std::printf("| %dx%d | %d | 9 | %s | %.2f | %.2f | %.2f |\n", c.w, c.h, c.d, lr ? "yes" : "no",
+                  dps_ms, bm_ms, dps_ms / bm_ms);
+    }
+  }
+  return 0;
+}
