@@ -1,0 +1,277 @@
+// Tests of the stereo matcher: exact answers on shifted textures, the interest operator, options
+// that must be refused, the temporal filter, disparity files, and accuracy on real data —
+// Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the real KITTI
+// road pair's road disparity.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "check.h"
+#include "dps/disparity_io.h"
+#include "dps/error.h"
+#include "dps/sad_stereo.h"
+
+namespace {
+
+constexpr double kShiftTolPx = 0.1;       // median error on a pure shift
+constexpr double kMinShiftDensity = 0.9;  // valid fraction of the matchable area
+constexpr double kBadThresholdPx = 1.0;   // Middlebury: |d - d_gt| > 1 is bad
+constexpr double kKittiRoadVsSgbmPx = 1.0;  // road rows: dps's median vs StereoSGBM's
+constexpr double kKittiRoadVsLinePx = 2.0;  // ... and vs the documented (approximate) 0.31 (v - 176)
+
+const std::string kReal = DPS_REAL_DATA_DIR;
+
+cv::Mat Texture(int w, int h, unsigned seed) {
+  cv::Mat t(h, w, CV_8U);
+  cv::RNG rng(seed);
+  rng.fill(t, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(t, t, cv::Size(), 1.2);
+  cv::normalize(t, t, 0, 255, cv::NORM_MINMAX);
+  return t;
+}
+
+// Median disparity error and density over the pixels where every disparity can be searched.
+void ShiftStats(const cv::Mat& d, double truth, int x0, int x1, double* median_err, double* density) {
+  std::vector<double> err;
+  int total = 0;
+  for (int y = 10; y < d.rows - 10; ++y) {
+    for (int x = x0; x < x1; ++x) {
+      ++total;
+      const float v = d.at<float>(y, x);
+      if (std::isfinite(v)) err.push_back(std::abs(v - truth));
+    }
+  }
+  std::nth_element(err.begin(), err.begin() + err.size() / 2, err.end());
+  *median_err = err.empty() ? 1e9 : err[err.size() / 2];
+  *density = static_cast<double>(err.size()) / total;
+}
+
+void TestShifts() {
+  const cv::Mat big = Texture(420, 200, 3);
+  // Integer and fractional shifts; a negative one needs a negative range (motion stereo).
+  for (const double shift : {0.0, 5.0, 12.0, 7.25, 3.5, -3.0, -6.75}) {
+    // right(x) = left(x + shift)  =>  left(x) = right(x - shift): disparity = shift.
+    cv::Mat right;
+    const cv::Matx23d m(1, 0, shift, 0, 1, 0);
+    cv::warpAffine(big, right, m, big.size(), cv::INTER_CUBIC | cv::WARP_INVERSE_MAP, cv::BORDER_REFLECT);
+    dps::StereoOptions o;
+    o.num_disparities = 16;
+    o.min_disparity = shift < 0 ? -8 : 0;
+    dps::SadStereoMatcher matcher(o);
+    const cv::Mat d = matcher.Compute(big, right);
+    CHECK_EQ(d.type(), CV_32F);
+    double err = 0, density = 0;
+    ShiftStats(d, shift, 40, big.cols - 40, &err, &density);
+    std::printf("shift %6.2f px: median error %.3f px, density %.3f\n", shift, err, density);
+    CHECK(err <= kShiftTolPx);
+    CHECK(density >= kMinShiftDensity);
+  }
+}
+
+void TestInterestOperator() {
+  // A uniform image has no texture: every pixel is invalid.
+  const cv::Mat flat(120, 160, CV_8U, cv::Scalar(128));
+  dps::StereoOptions o;
+  o.num_disparities = 16;
+  dps::SadStereoMatcher matcher(o);
+  const cv::Mat d = matcher.Compute(flat, flat);
+  CHECK_EQ(cv::countNonZero(d != dps::kInvalidDisparity), 0);
+  // The prefilter of a constant image is its zero level, cap.
+  const cv::Mat p = dps::LogPrefilter(flat, 1.0, 6.0, 31);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(p, &lo, &hi);
+  CHECK_EQ(lo, 31.0);
+  CHECK_EQ(hi, 31.0);
+  // Texture on the left half only: the flat half stays invalid at the fine level and without
+  // the coarse fill.
+  cv::Mat half = flat.clone();
+  Texture(80, 120, 5).copyTo(half(cv::Rect(0, 0, 80, 120)));
+  o.two_levels = false;
+  dps::SadStereoMatcher one(o);
+  const cv::Mat dh = one.Compute(half, half);
+  CHECK_EQ(cv::countNonZero(dh(cv::Rect(100, 0, 60, 120)) != dps::kInvalidDisparity), 0);
+  CHECK(cv::countNonZero(dh(cv::Rect(20, 10, 50, 100)) != dps::kInvalidDisparity) > 4000);
+}
+
+void TestBadOptions() {
+  auto with = [](auto change) {
+    dps::StereoOptions o;
+    change(o);
+    return o;
+  };
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.block_width = 8; })), dps::Error, "block_width");
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.block_height = 1; })), dps::Error, "block_height");
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.num_disparities = 1; })), dps::Error,
+                    "num_disparities = 1");
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.uniqueness_ratio = 101; })), dps::Error,
+                    "uniqueness_ratio");
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.log_sigma_px = 0; })), dps::Error, "log_sigma_px");
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.prefilter_cap = 64; })), dps::Error, "prefilter_cap");
+  dps::SadStereoMatcher m(dps::StereoOptions{});
+  CHECK_THROWS_WITH(m.Compute(cv::Mat(50, 60, CV_8U), cv::Mat(50, 61, CV_8U)), dps::Error, "differ in size");
+  CHECK_THROWS_WITH(m.Compute(cv::Mat(50, 60, CV_8U), cv::Mat(50, 60, CV_8U)), dps::Error, "too small");
+  CHECK_THROWS_WITH(m.Compute(cv::Mat(), cv::Mat()), dps::Error, "empty");
+  CHECK_THROWS_WITH(dps::TemporalConsistencyFilter(0.0, 1.0), dps::Error, "forgetting");
+}
+
+void TestTemporalFilter() {
+  dps::TemporalConsistencyFilter filter(0.5, 1.0);
+  cv::Mat d(4, 4, CV_32F, cv::Scalar(10.0f));
+  int suppressed = 0;
+  for (int frame = 0; frame < 10; ++frame) {
+    d.at<float>(1, 1) = frame % 2 ? 4.0f : 16.0f;  // flickers by 12 px
+    d.at<float>(2, 2) = 10.0f + 0.1f * frame;       // drifts slowly (an approaching object)
+    d.at<float>(3, 3) = frame == 5 ? dps::kInvalidDisparity : 7.0f;
+    const cv::Mat out = filter.Apply(d);
+    if (frame >= 2) {
+      suppressed += !std::isfinite(out.at<float>(1, 1));
+      CHECK(std::isfinite(out.at<float>(2, 2)));
+      CHECK_NEAR(out.at<float>(0, 0), 10.0, 0);
+    }
+    if (frame == 6) CHECK(std::isfinite(out.at<float>(3, 3)));  // restarts after a gap
+  }
+  CHECK_EQ(suppressed, 8);
+}
+
+void TestDisparityFiles() {
+  const auto dir = std::filesystem::temp_directory_path() / "dps_test_stereo";
+  std::filesystem::create_directories(dir);
+  cv::Mat d(3, 4, CV_32F, cv::Scalar(12.5f));
+  d.at<float>(0, 0) = dps::kInvalidDisparity;
+  d.at<float>(2, 3) = 0.3f;
+  for (const char* name : {"d.png", "d.pfm"}) {
+    const std::string p = (dir / name).string();
+    dps::WriteDisparity(p, d);
+    const cv::Mat back = dps::ReadDisparity(p);
+    CHECK(!std::isfinite(back.at<float>(0, 0)));
+    CHECK_NEAR(back.at<float>(1, 1), 12.5, 1.0 / 512);
+    CHECK_NEAR(back.at<float>(2, 3), 0.3, 1.0 / 512);
+  }
+  cv::Mat negative = d.clone();
+  negative.at<float>(1, 2) = -2.0f;
+  CHECK_THROWS_WITH(dps::WriteDisparity((dir / "n.png").string(), negative), dps::Error, "use .pfm");
+  CHECK(!std::filesystem::exists(dir / "n.png"));
+  CHECK_THROWS_WITH(dps::WriteDisparity((dir / "n.tif").string(), d), dps::Error, "unknown disparity format");
+  std::filesystem::remove_all(dir);
+}
+
+struct Score {
+  double bad = 0, density = 0;
+};
+
+// Fraction of pixels with known truth (and 18 px from the border) whose disparity is off by more
+// than 1 px, counting invalid pixels as bad.
+Score Middlebury(const cv::Mat& d, const cv::Mat& gt, double gt_scale) {
+  int known = 0, bad = 0, valid = 0;
+  for (int y = 18; y < gt.rows - 18; ++y) {
+    for (int x = 18; x < gt.cols - 18; ++x) {
+      const int g = gt.at<std::uint8_t>(y, x);
+      if (g == 0) continue;
+      ++known;
+      const float v = d.at<float>(y, x);
+      if (!std::isfinite(v)) {
+        ++bad;
+        continue;
+      }
+      ++valid;
+      bad += std::abs(v - g / gt_scale) > kBadThresholdPx;
+    }
+  }
+  return {static_cast<double>(bad) / known, static_cast<double>(valid) / known};
+}
+
+cv::Mat FromOpenCV(const cv::Mat& d16) {
+  cv::Mat d;
+  d16.convertTo(d, CV_32F, 1.0 / 16);
+  d.setTo(dps::kInvalidDisparity, d16 < 0);
+  return d;
+}
+
+void TestMiddlebury(const std::string& name, const std::string& left, const std::string& right,
+                    const std::string& truth, double scale, int disparities) {
+  const std::string dir = kReal + "/middlebury/" + name + "/";
+  const cv::Mat l = cv::imread(dir + left, cv::IMREAD_GRAYSCALE);
+  const cv::Mat r = cv::imread(dir + right, cv::IMREAD_GRAYSCALE);
+  const cv::Mat gt = cv::imread(dir + truth, cv::IMREAD_GRAYSCALE);
+  CHECK(!l.empty() && !r.empty() && !gt.empty());
+  if (l.empty() || r.empty() || gt.empty()) return;
+  dps::StereoOptions o;
+  o.num_disparities = disparities;
+  o.block_width = o.block_height = 9;
+  dps::SadStereoMatcher matcher(o);
+  const Score ours = Middlebury(matcher.Compute(l, r), gt, scale);
+  cv::Mat d16;
+  cv::StereoBM::create(disparities, 9)->compute(l, r, d16);
+  const Score bm = Middlebury(FromOpenCV(d16), gt, scale);
+  cv::StereoSGBM::create(0, disparities, 9)->compute(l, r, d16);
+  const Score sgbm = Middlebury(FromOpenCV(d16), gt, scale);
+  std::printf("middlebury %-8s D=%d block 9: dps bad %.4f density %.3f | StereoBM bad %.4f density %.3f"
+              " | StereoSGBM bad %.4f density %.3f\n",
+              name.c_str(), disparities, ours.bad, ours.density, bm.bad, bm.density, sgbm.bad, sgbm.density);
+  CHECK(ours.bad <= bm.bad);
+}
+
+// The median valid disparity of a row segment (NaN when fewer than 50 are valid).
+double RowMedian(const cv::Mat& d, int v, int u0, int u1) {
+  std::vector<float> row;
+  for (int u = u0; u < u1; ++u) {
+    if (std::isfinite(d.at<float>(v, u))) row.push_back(d.at<float>(v, u));
+  }
+  if (row.size() < 50) return std::nan("");
+  std::nth_element(row.begin(), row.begin() + row.size() / 2, row.end());
+  return row[row.size() / 2];
+}
+
+void TestKittiRoad() {
+  const cv::Mat l = cv::imread(kReal + "/kitti_pair/imgKittyl.bmp", cv::IMREAD_GRAYSCALE);
+  const cv::Mat r = cv::imread(kReal + "/kitti_pair/imgKitty.bmp", cv::IMREAD_GRAYSCALE);
+  CHECK(!l.empty() && !r.empty());
+  if (l.empty() || r.empty()) return;
+  dps::StereoOptions o;
+  o.num_disparities = 64;
+  dps::SadStereoMatcher matcher(o);
+  const cv::Mat d = matcher.Compute(l, r);
+  cv::Mat d16;
+  cv::StereoSGBM::create(0, 64, 9)->compute(l, r, d16);
+  const cv::Mat sgbm = FromOpenCV(d16);
+  // The road in front of the car, rows 250..355, columns 500..750: per row, dps's median
+  // disparity agrees with StereoSGBM's and roughly with the documented d = 0.31 (v - 176).
+  int rows = 0, good = 0;
+  double worst_sgbm = 0, worst_line = 0;
+  for (int v = 250; v < 360; v += 5) {
+    const double ours = RowMedian(d, v, 500, 750), ref = RowMedian(sgbm, v, 500, 750);
+    if (std::isnan(ours) || std::isnan(ref)) continue;
+    const double line = 0.31 * (v - 176);
+    worst_sgbm = std::max(worst_sgbm, std::abs(ours - ref));
+    worst_line = std::max(worst_line, std::abs(ours - line));
+    if (std::getenv("DPS_VERBOSE")) std::printf("  v %d dps %.2f sgbm %.2f line %.2f\n", v, ours, ref, line);
+    ++rows;
+    good += std::abs(ours - ref) <= kKittiRoadVsSgbmPx && std::abs(ours - line) <= kKittiRoadVsLinePx;
+  }
+  std::printf("kitti road: %d rows, worst |dps - StereoSGBM| %.2f px, worst |dps - 0.31 (v - 176)| %.2f px\n",
+              rows, worst_sgbm, worst_line);
+  CHECK(rows >= 20);
+  CHECK_EQ(good, rows);
+}
+
+}  // namespace
+
+int main() {
+  TestShifts();
+  TestInterestOperator();
+  TestBadOptions();
+  TestTemporalFilter();
+  TestDisparityFiles();
+  TestMiddlebury("tsukuba", "im3.png", "im4.png", "disp3.pgm", 16.0, 16);
+  TestMiddlebury("tsukuba", "im3.png", "im4.png", "disp3.pgm", 16.0, 32);
+  TestMiddlebury("venus", "im2.png", "im6.png", "disp2.pgm", 8.0, 16);
+  TestMiddlebury("venus", "im2.png", "im6.png", "disp2.pgm", 8.0, 32);
+  TestKittiRoad();
+  return dps_test::Report();
+}
