@@ -227,8 +227,11 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
       const Eigen::Vector3d w = st.world_from_vehicle.Apply(hit.point_vehicle);
       const double n = Fbm(w.x(), w.z(), 0.8, 4, seed + 11);
       if (hit.id == kIdPaint) return cv::Vec3f::all(static_cast<float>(0.78 + 0.12 * n));
-      const double grain = Fbm(w.x(), w.z(), 0.12, 2, seed + 23);
-      const float g = static_cast<float>(0.22 + 0.16 * n + 0.10 * grain);
+      // Asphalt: patches at 0.8 m, and aggregate at 0.25 m and 0.06 m that correlation stereo
+      // can lock on to (real asphalt is textured down to the pixel).
+      const double mid = Fbm(w.x(), w.z(), 0.25, 2, seed + 23);
+      const double grain = Fbm(w.x(), w.z(), 0.06, 2, seed + 37);
+      const float g = static_cast<float>(0.30 + 0.14 * (n - 0.5) + 0.16 * (mid - 0.5) + 0.14 * (grain - 0.5));
       return cv::Vec3f(g, g * 1.01f, g * 1.03f);
     }
     default: break;
@@ -239,9 +242,10 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
   const double a = hit.face_a_m, h = hit.face_h_m;
   cv::Vec3f base = kPalette[static_cast<size_t>(obj.colour) % (sizeof(kPalette) / sizeof(kPalette[0]))];
   base *= static_cast<float>(obj.brightness / 0.6);
-  // Surface detail for correlation stereo: noise at 0.25 m and finer.
+  // Surface detail for correlation stereo: noise at 0.25 m and at 0.07 m (dirt, reflections).
   const double detail = Fbm(a, h, 0.25, 3, oseed);
-  double tone = 0.75 + 0.5 * (detail - 0.5);
+  const double fine = Fbm(a, h, 0.07, 2, oseed + 71);
+  double tone = 0.75 + 0.6 * (detail - 0.5) + 0.35 * (fine - 0.5);
   if (obj.kind == "car" || obj.kind == "truck") {
     const double frac = h / obj.height_m;
     if (hit.face != 2 && h < 0.35) {

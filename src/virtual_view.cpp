@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -158,9 +159,11 @@ VerticalOffset EstimateVerticalOffset(const cv::Mat& left_in, const cv::Mat& rig
     cv::Point at;
     cv::minMaxLoc(score, nullptr, &best, nullptr, &at);
     if (best < kMinScore || at.y == 0 || at.y == score.rows - 1) continue;
-    // A second, distant peak as good as the best makes the match ambiguous (repeated texture).
+    // A second peak a template width or more away, as good as the best, makes the match
+    // ambiguous (repeated texture such as lane dashes).
     cv::Mat others = score.clone();
-    cv::rectangle(others, cv::Rect(at.x - 2, 0, 5, others.rows), cv::Scalar(-1), cv::FILLED);
+    cv::rectangle(others, cv::Rect(at.x - 2 * kHalf, 0, 4 * kHalf + 1, others.rows), cv::Scalar(-1),
+                  cv::FILLED);
     double second = 0;
     cv::minMaxLoc(others, nullptr, &second);
     if (second > best - 0.05) continue;

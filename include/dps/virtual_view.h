@@ -14,8 +14,8 @@
 //   (SideViewSpec); for turning, the plane follows the displacement between two frames, given as a
 //   yaw of the viewing direction; SideViewCache keeps the tables per quantised yaw.
 // - Drift: small rotation errors make the rows of the two front views disagree. The paper
-//   shifted one view by hand; EstimateVerticalOffset measures the shift from the images, and a
-//   view built with cy + offset compensates it.
+//   shifted one view by hand; EstimateVerticalOffset measures the shift of the right view from
+//   the images, and a right view built with cy - offset compensates it.
 #pragma once
 
 #include <list>
