@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <string>
+#include <utility>
 #include <thread>
 #include <vector>
 
@@ -18,17 +19,24 @@
 
 namespace {
 
-// Median wall time of `runs` calls, milliseconds (after one warm-up call).
-double MedianMs(int runs, const std::function<void()>& f) {
-  f();
-  std::vector<double> t;
-  for (int i = 0; i < runs; ++i) {
-    const auto a = std::chrono::steady_clock::now();
+// Median wall times (ms) of `runs` calls of a and b, interleaved (a, b, a, b, ...) so that both
+// see the same machine load; one warm-up call each first.
+std::pair<double, double> MedianMs(int runs, const std::function<void()>& a, const std::function<void()>& b) {
+  a();
+  b();
+  std::vector<double> ta, tb;
+  auto time = [](const std::function<void()>& f) {
+    const auto t0 = std::chrono::steady_clock::now();
     f();
-    t.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - a).count());
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  };
+  for (int i = 0; i < runs; ++i) {
+    ta.push_back(time(a));
+    tb.push_back(time(b));
   }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
+  std::sort(ta.begin(), ta.end());
+  std::sort(tb.begin(), tb.end());
+  return {ta[ta.size() / 2], tb[tb.size() / 2]};
 }
 
 }  // namespace
@@ -45,7 +53,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "dps-bench: error: cannot read %s/kitti_pair/imgKitty[l].bmp\n", data.c_str());
     return 1;
   }
-  const int runs = 15;
+  const int runs = 31;
   std::printf("OpenCV %s, %d threads, %u hardware threads; median of %d runs\n\n", CV_VERSION,
               cv::getNumThreads(), std::thread::hardware_concurrency(), runs);
   std::printf("| size | D | block | LR check | dps ms | StereoBM ms | ratio dps/BM |\n");
@@ -60,11 +68,10 @@ int main(int argc, char** argv) {
       o.num_disparities = c.d;
       o.left_right_check = lr;
       dps::SadStereoMatcher matcher(o);
-      const double dps_ms = MedianMs(runs, [&] { matcher.Compute(l, r); });
       auto bm = cv::StereoBM::create(c.d, 9);
       bm->setDisp12MaxDiff(lr ? 1 : -1);
       cv::Mat out;
-      const double bm_ms = MedianMs(runs, [&] { bm->compute(l, r, out); });
+      const auto [dps_ms, bm_ms] = MedianMs(runs, [&] { matcher.Compute(l, r); }, [&] { bm->compute(l, r, out); });
       std::printf("| %dx%d | %d | 9 | %s | %.2f | %.2f | %.2f |\n", c.w, c.h, c.d, lr ? "yes" : "no",
                   dps_ms, bm_ms, dps_ms / bm_ms);
     }

@@ -2,20 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
-#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "dps/error.h"
+#include "sad_stereo_kernel.h"
 
 namespace dps {
 namespace {
-
-constexpr std::uint16_t kMaxCost = 0xFFFF;
 
 void Require(bool ok, const char* field, double value, const char* constraint) {
   if (!ok) throw Error(Str("stereo option ", field, " = ", value, ": violated constraint ", constraint));
@@ -32,82 +32,6 @@ cv::Mat ToGrey(const cv::Mat& image, const char* which) {
   return grey;
 }
 
-#if CV_SIMD
-using Cost = cv::v_uint16;
-constexpr int kLanes = cv::v_uint16::nlanes;
-#else
-constexpr int kLanes = 1;
-#endif
-
-// Everything one level of matching needs, shared by the row stripes.
-struct LevelInput {
-  cv::Mat left;     // prefiltered, CV_8U
-  cv::Mat right;    // prefiltered, CV_8U
-  cv::Mat textured; // CV_8U, 255 where the window's mean |LoG| reaches the threshold
-  int d_min = 0, n = 0, n_padded = 0;
-  int rw = 0, rh = 0;
-  int x_lo = 0, x_hi = -1;  // columns (inclusive) where every disparity's window is inside
-  int pad = 0;              // columns of replicated border on each side of a padded right row
-};
-
-// Copies one prefiltered right row into `dst` with `pad` replicated columns on each side.
-void PadRow(const cv::Mat& right, int y, int pad, std::uint8_t* dst) {
-  const std::uint8_t* src = right.ptr<std::uint8_t>(y);
-  const int w = right.cols;
-  std::fill(dst, dst + pad, src[0]);
-  std::copy(src, src + w, dst + pad);
-  std::fill(dst + pad + w, dst + pad + w + pad, src[w - 1]);
-}
-
-// hsad[x][k] += |L(y, x) - R(y, x - d_max + k)| for x in [x0, x1): the column sums of a new row.
-// Costs are stored with k = d_max - d so that the right pixels of consecutive k are consecutive.
-void AddRow(const LevelInput& in, const std::uint8_t* left_row, const std::uint8_t* right_padded,
-            int x0, int x1, std::uint16_t* hsad) {
-  const int np = in.n_padded;
-  const int d_max = in.d_min + in.n - 1;
-  for (int x = x0; x < x1; ++x) {
-    std::uint16_t* h = hsad + static_cast<size_t>(x) * np;
-    const std::uint8_t* r = right_padded + in.pad + x - d_max;
-    const int l = left_row[x];
-    for (int k = 0; k < np; ++k) h[k] = static_cast<std::uint16_t>(h[k] + std::abs(l - r[k]));
-  }
-}
-
-// The window moves down one row: hsad += |L(y_in) - R(y_in)| - |L(y_out) - R(y_out)|, in one
-// pass over the column sums.
-void SlideRows(const LevelInput& in, const std::uint8_t* left_in, const std::uint8_t* right_in,
-               const std::uint8_t* left_out, const std::uint8_t* right_out, int x0, int x1,
-               std::uint16_t* hsad) {
-  const int np = in.n_padded;
-  const int d_max = in.d_min + in.n - 1;
-  for (int x = x0; x < x1; ++x) {
-    std::uint16_t* h = hsad + static_cast<size_t>(x) * np;
-    const std::uint8_t* ri = right_in + in.pad + x - d_max;
-    const std::uint8_t* ro = right_out + in.pad + x - d_max;
-    int k = 0;
-#if CV_SIMD
-    const Cost li = cv::vx_setall_u16(left_in[x]), lo = cv::vx_setall_u16(left_out[x]);
-    for (; k < np; k += kLanes) {
-      const Cost add = cv::v_absdiff(li, cv::vx_load_expand(ri + k));
-      const Cost sub = cv::v_absdiff(lo, cv::vx_load_expand(ro + k));
-      cv::v_store(h + k, cv::vx_load(h + k) + add - sub);
-    }
-#endif
-    for (; k < np; ++k) {
-      h[k] = static_cast<std::uint16_t>(h[k] + std::abs(left_in[x] - ri[k]) - std::abs(left_out[x] - ro[k]));
-    }
-  }
-}
-
-// sad[k] += hin[k] - hout[k]: the window moves one column to the right.
-inline void SlideWindow(std::uint16_t* sad, const std::uint16_t* hin, const std::uint16_t* hout, int np) {
-  int k = 0;
-#if CV_SIMD
-  for (; k < np; k += kLanes) cv::v_store(sad + k, cv::vx_load(sad + k) + cv::vx_load(hin + k) - cv::vx_load(hout + k));
-#endif
-  for (; k < np; ++k) sad[k] = static_cast<std::uint16_t>(sad[k] + hin[k] - hout[k]);
-}
-
 }  // namespace
 
 // Buffers of one stripe of rows, kept between calls (allocating them anew each time costs as much
@@ -117,6 +41,19 @@ struct StripeBuffers {
   std::vector<std::uint8_t> padded, padded_out;
   std::vector<int> disp2, best_d;
   std::vector<float> row_disp;
+
+  internal::SadKernelBuffers Prepare(int width, int n_padded, int pad) {
+    hsad.resize(static_cast<size_t>(width) * n_padded);
+    sad.resize(n_padded);
+    cost2.resize(width);
+    padded.resize(static_cast<size_t>(width) + 2 * pad);
+    padded_out.resize(padded.size());
+    disp2.resize(width);
+    best_d.resize(width);
+    row_disp.resize(width);
+    return {hsad.data(), sad.data(), cost2.data(), padded.data(), padded_out.data(),
+            disp2.data(), best_d.data(), row_disp.data()};
+  }
 };
 
 // Everything one pyramid level needs between calls.
@@ -131,159 +68,21 @@ struct SadStereoMatcher::Workspace {
   cv::Mat left_grey, right_grey, left_half, right_half;
 };
 
-namespace {
+namespace internal {
 
-// Matches rows [y0, y1) of one level; writes sub-pixel disparities into `out` (CV_32F).
-void MatchStripe(const LevelInput& in, const StereoOptions& o, int y0, int y1, StripeBuffers& buf,
-                 cv::Mat& out) {
-  const int w = in.left.cols;
-  const int np = in.n_padded;
-  const int d_max = in.d_min + in.n - 1;
-  const int xa = std::max(0, in.x_lo - in.rw), xb = std::min(w, in.x_hi + in.rw + 1);
-  std::vector<std::uint16_t>& hsad = buf.hsad;
-  hsad.assign(static_cast<size_t>(w) * np, 0);
-  std::vector<std::uint16_t>& sad = buf.sad;
-  sad.assign(np, 0);
-  std::vector<std::uint8_t>& padded = buf.padded;
-  std::vector<std::uint8_t>& padded_out = buf.padded_out;
-  padded.resize(static_cast<size_t>(w) + 2 * in.pad);
-  padded_out.resize(padded.size());
-  std::vector<std::uint16_t>& cost2 = buf.cost2;
-  cost2.resize(w);
-  std::vector<int>& disp2 = buf.disp2;
-  std::vector<int>& best_d = buf.best_d;
-  disp2.resize(w);
-  best_d.resize(w);
-  std::vector<float>& row_disp = buf.row_disp;
-  row_disp.resize(w);
-#if CV_SIMD
-  alignas(64) std::uint16_t ramp_values[kLanes];
-  for (int i = 0; i < kLanes; ++i) ramp_values[i] = static_cast<std::uint16_t>(i);
-  const Cost ramp = cv::vx_load_aligned(ramp_values);
-  const Cost step = cv::vx_setall_u16(static_cast<std::uint16_t>(kLanes));
-  const Cost limit = cv::vx_setall_u16(static_cast<std::uint16_t>(in.n));
+const SadKernel& BestSadKernel() {
+  // DPS_SIMD=baseline forces the baseline kernel (for comparisons and benchmarks).
+  const char* force = std::getenv("DPS_SIMD");
+  const bool baseline_only = force && std::string(force) == "baseline";
+#ifdef DPS_HAVE_AVX2_KERNEL
+  static const bool has_avx2 = cv::checkHardwareSupport(CV_CPU_AVX2);
+  if (has_avx2 && !baseline_only) return avx2::kKernel;
 #endif
-  const int uniq = static_cast<int>(std::lround(o.uniqueness_ratio));
-
-  // Column sums over the first window.
-  for (int yy = y0 - in.rh; yy <= y0 + in.rh; ++yy) {
-    PadRow(in.right, yy, in.pad, padded.data());
-    AddRow(in, in.left.ptr<std::uint8_t>(yy), padded.data(), xa, xb, hsad.data());
-  }
-  for (int y = y0; y < y1; ++y) {
-    if (y > y0) {
-      PadRow(in.right, y + in.rh, in.pad, padded.data());
-      PadRow(in.right, y - in.rh - 1, in.pad, padded_out.data());
-      SlideRows(in, in.left.ptr<std::uint8_t>(y + in.rh), padded.data(),
-                in.left.ptr<std::uint8_t>(y - in.rh - 1), padded_out.data(), xa, xb, hsad.data());
-    }
-    std::fill(cost2.begin(), cost2.end(), kMaxCost);
-    std::fill(row_disp.begin(), row_disp.end(), kInvalidDisparity);
-    std::fill(best_d.begin(), best_d.end(), 0);
-    // Row sums over the first window.
-    std::fill(sad.begin(), sad.end(), 0);
-    for (int x = in.x_lo - in.rw; x <= in.x_lo + in.rw; ++x) {
-      const std::uint16_t* h = &hsad[static_cast<size_t>(x) * np];
-      for (int k = 0; k < np; ++k) sad[k] = static_cast<std::uint16_t>(sad[k] + h[k]);
-    }
-    const std::uint8_t* textured = in.textured.ptr<std::uint8_t>(y);
-    for (int x = in.x_lo; x <= in.x_hi; ++x) {
-      const bool slide = x > in.x_lo;
-      const std::uint16_t* hin = slide ? &hsad[static_cast<size_t>(x + in.rw) * np] : nullptr;
-      const std::uint16_t* hout = slide ? &hsad[static_cast<size_t>(x - in.rw - 1) * np] : nullptr;
-      if (!textured[x]) {
-        if (slide) SlideWindow(sad.data(), hin, hout, np);
-        continue;
-      }
-      // Slide the window and find the best disparity (smallest cost; lanes k >= n, padding
-      // outside the range, are excluded) in one pass.
-      int k_best = 0;
-      std::uint16_t c_best = kMaxCost;
-#if CV_SIMD
-      {
-        Cost vmin = cv::vx_setall_u16(kMaxCost), vidx = cv::vx_setzero_u16();
-        Cost kv = ramp;
-        for (int k = 0; k < np; k += kLanes) {
-          Cost c = cv::vx_load(&sad[k]);
-          if (slide) {
-            c = c + cv::vx_load(hin + k) - cv::vx_load(hout + k);
-            cv::v_store(&sad[k], c);
-          }
-          if (k + kLanes > in.n) c = cv::v_select(kv < limit, c, cv::vx_setall_u16(kMaxCost));
-          vidx = cv::v_select(c < vmin, kv, vidx);
-          vmin = cv::v_min(vmin, c);
-          kv += step;
-        }
-        c_best = cv::v_reduce_min(vmin);
-        k_best = cv::v_reduce_min(cv::v_select(vmin == cv::vx_setall_u16(c_best), vidx,
-                                               cv::vx_setall_u16(kMaxCost)));
-      }
-#else
-      if (slide) SlideWindow(sad.data(), hin, hout, np);
-      for (int k = 0; k < in.n; ++k) {
-        if (sad[k] < c_best) c_best = sad[k], k_best = k;
-      }
-#endif
-      const int d = d_max - k_best;
-      // The best match of the right pixel x - d seen from the left (for the left-right check).
-      const int xr = x - d;
-      if (xr >= 0 && xr < w && c_best < cost2[xr]) {
-        cost2[xr] = c_best;
-        disp2[xr] = d;
-      }
-      // Uniqueness: no non-adjacent disparity within uniq % of the best.
-      const int thresh = std::min<int>(kMaxCost - 1, c_best + c_best * uniq / 100);
-      bool unique = true;
-      int k = 0;
-#if CV_SIMD
-      {
-        const Cost vthresh = cv::vx_setall_u16(static_cast<std::uint16_t>(thresh));
-        // Lanes k_best - 1 .. k_best + 1 are allowed to be close: (k - (k_best - 1)) <= 2 unsigned.
-        const Cost lo = cv::vx_setall_u16(static_cast<std::uint16_t>(k_best - 1));
-        const Cost two = cv::vx_setall_u16(2);
-        Cost kv = ramp;
-        for (; k + kLanes <= in.n; k += kLanes) {
-          const Cost close = cv::vx_load(&sad[k]) <= vthresh;
-          const Cost neighbour = (kv - lo) <= two;
-          if (cv::v_check_any(close & ~neighbour)) {
-            unique = false;
-            break;
-          }
-          kv += step;
-        }
-      }
-#endif
-      for (; k < in.n && unique; ++k) {
-        if (sad[k] <= thresh && (k < k_best - 1 || k > k_best + 1)) unique = false;
-      }
-      if (!unique) continue;
-      float disp = static_cast<float>(d);
-      if (o.subpixel && k_best > 0 && k_best < in.n - 1) {
-        // Equiangular fit: SAD is V-shaped around its minimum, so a V through the three costs
-        // (steeper side's slope) locates it exactly; a parabola would be biased to integers.
-        const int c_dm = sad[k_best + 1], c_dp = sad[k_best - 1];  // costs at d - 1 and d + 1
-        const int slope = std::max(c_dm, c_dp) - c_best;
-        if (slope > 0) disp += static_cast<float>(c_dm - c_dp) / (2.0f * slope);
-      }
-      row_disp[x] = disp;
-      best_d[x] = d;
-    }
-    float* dst = out.ptr<float>(y);
-    for (int x = in.x_lo; x <= in.x_hi; ++x) {
-      if (!std::isfinite(row_disp[x])) continue;
-      if (o.left_right_check) {
-        const int xr = x - best_d[x];
-        if (xr < 0 || xr >= w || cost2[xr] == kMaxCost ||
-            std::abs(disp2[xr] - best_d[x]) > o.left_right_max_diff) {
-          continue;
-        }
-      }
-      dst[x] = row_disp[x];
-    }
-  }
+  (void)baseline_only;
+  return baseline::kKernel;
 }
 
-}  // namespace
+}  // namespace internal
 
 void StereoOptions::Check() const {
   Require(num_disparities >= 2, "num_disparities", num_disparities, ">= 2");
@@ -340,29 +139,41 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
                                               int n, int level) {
   const StereoOptions& o = options_;
   LevelBuffers& buf = ws_->levels[level];
-  LevelInput in;
   LogPrefilterInto(left, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, buf, buf.left);
   LogPrefilterInto(right, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, buf, buf.right);
-  in.left = buf.left;
-  in.right = buf.right;
   cv::absdiff(buf.left, cv::Scalar(o.prefilter_cap), buf.magnitude);
   cv::boxFilter(buf.magnitude, buf.mean, CV_32F, cv::Size(o.block_width, o.block_height),
                 cv::Point(-1, -1), true, cv::BORDER_REPLICATE);
   cv::compare(buf.mean, o.texture_threshold, buf.textured, cv::CMP_GE);
-  in.textured = buf.textured;
+  const int w = left.cols, h = left.rows;
+  cv::Mat& out = buf.out;
+  out.create(h, w, CV_32F);
+  out.setTo(cv::Scalar(kInvalidDisparity));
+
+  const internal::SadKernel& kernel = internal::BestSadKernel();
+  internal::SadKernelInput in;
+  in.left = buf.left.ptr<std::uint8_t>();
+  in.left_step = buf.left.step;
+  in.right = buf.right.ptr<std::uint8_t>();
+  in.right_step = buf.right.step;
+  in.textured = buf.textured.ptr<std::uint8_t>();
+  in.textured_step = buf.textured.step;
+  in.out = out.ptr<float>();
+  in.out_step = out.step / sizeof(float);
+  in.width = w;
   in.d_min = d_min;
   in.n = n;
-  in.n_padded = (n + kLanes - 1) / kLanes * kLanes;
+  in.n_padded = (n + kernel.lanes - 1) / kernel.lanes * kernel.lanes;
   in.rw = o.block_width / 2;
   in.rh = o.block_height / 2;
-  const int w = left.cols, h = left.rows;
   const int d_max = d_min + n - 1;
   in.x_lo = in.rw + std::max(0, d_max);
   in.x_hi = w - 1 - in.rw - std::max(0, -d_min);
   in.pad = std::max(std::abs(d_min), std::abs(d_max)) + in.n_padded + in.rw + 2;
-  cv::Mat& out = buf.out;
-  out.create(h, w, CV_32F);
-  out.setTo(cv::Scalar(kInvalidDisparity));
+  in.uniqueness_percent = static_cast<int>(std::lround(o.uniqueness_ratio));
+  in.subpixel = o.subpixel;
+  in.left_right_check = o.left_right_check;
+  in.left_right_max_diff = o.left_right_max_diff;
   const int y_lo = in.rh, y_hi = h - in.rh;  // rows [y_lo, y_hi)
   if (in.x_hi < in.x_lo || y_hi <= y_lo) return out;
   // A few stripes per thread: each starts with a full window of rows, so fewer is cheaper.
@@ -371,7 +182,7 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
   cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
     for (int s = r.start; s < r.end; ++s) {
       const int a = y_lo + (y_hi - y_lo) * s / stripes, b = y_lo + (y_hi - y_lo) * (s + 1) / stripes;
-      if (b > a) MatchStripe(in, o, a, b, buf.stripes[s], out);
+      if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, in.n_padded, in.pad));
     }
   });
   return out;

@@ -74,6 +74,27 @@ void TestShifts() {
   }
 }
 
+// The kernel is built for the baseline instruction set and (on x86-64) for AVX2; both must give
+// the same disparities to the bit.
+void TestKernelsAgree() {
+  const cv::Mat big = Texture(400, 160, 11);
+  cv::Mat right;
+  cv::warpAffine(big, right, cv::Matx23d(1, 0, 9.3, 0, 1, 0), big.size(), cv::INTER_CUBIC | cv::WARP_INVERSE_MAP,
+                 cv::BORDER_REFLECT);
+  dps::StereoOptions o;
+  o.num_disparities = 40;  // not a multiple of the lane count: the padded lanes are exercised
+  o.min_disparity = -5;
+  dps::SadStereoMatcher matcher(o);
+  const cv::Mat best = matcher.Compute(big, right);
+  setenv("DPS_SIMD", "baseline", 1);
+  const cv::Mat baseline = matcher.Compute(big, right);
+  unsetenv("DPS_SIMD");
+  cv::Mat differ;
+  cv::compare(best, baseline, differ, cv::CMP_NE);
+  CHECK_EQ(cv::countNonZero(differ), 0);
+  CHECK(cv::countNonZero(best != dps::kInvalidDisparity) > 30000);
+}
+
 void TestInterestOperator() {
   // A uniform image has no texture: every pixel is invalid.
   const cv::Mat flat(120, 160, CV_8U, cv::Scalar(128));
@@ -264,6 +285,7 @@ void TestKittiRoad() {
 
 int main() {
   TestShifts();
+  TestKernelsAgree();
   TestInterestOperator();
   TestBadOptions();
   TestTemporalFilter();
