@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <thread>
@@ -15,7 +16,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "dps/rig_io.h"
 #include "dps/sad_stereo.h"
+#include "dps/virtual_view.h"
 
 namespace {
 
@@ -44,7 +47,8 @@ std::pair<double, double> MedianMs(int runs, const std::function<void()>& a, con
 int main(int argc, char** argv) {
   const std::string data = argc > 1 ? argv[1] : "data/real";
   if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
-    std::printf("usage: dps-bench [DATA_DIR]   (DATA_DIR holds kitti_pair/; default data/real)\n");
+    std::printf("usage: dps-bench [DATA_DIR [RIG]]   (DATA_DIR holds kitti_pair/, default data/real;\n"
+                "       RIG for the view timing, default data/rigs/omni_pair.yaml; run from the source)\n");
     return 0;
   }
   const cv::Mat left = cv::imread(data + "/kitti_pair/imgKittyl.bmp", cv::IMREAD_GRAYSCALE);
@@ -74,6 +78,30 @@ int main(int argc, char** argv) {
       const auto [dps_ms, bm_ms] = MedianMs(runs, [&] { matcher.Compute(l, r); }, [&] { bm->compute(l, r, out); });
       std::printf("| %dx%d | %d | 9 | %s | %.2f | %.2f | %.2f |\n", c.w, c.h, c.d, lr ? "yes" : "no",
                   dps_ms, bm_ms, dps_ms / bm_ms);
+    }
+  }
+
+  // View rectification: one cv::remap per view from the omni image (tables built once per rig).
+  const std::string rig_path = argc > 2 ? argv[2] : "data/rigs/omni_pair.yaml";
+  const dps::Rig rig = dps::ReadRig(rig_path);
+  std::printf("\n| omni size | view | view size | remap ms | table build ms |\n| --- | --- | --- | --- | --- |\n");
+  for (const int scale : {1, 2}) {
+    const int ow = 640 / scale, oh = 480 / scale;
+    dps::Rig r = rig;
+    for (dps::RigCamera& c : r.cameras) c.model = dps::ResizeCameraModel(c.model, ow, oh);
+    cv::Mat omni;
+    cv::resize(left, omni, cv::Size(ow, oh));
+    struct View { const char* name; dps::ViewSpec spec; const char* camera; };
+    const int vw = 400 / scale, vh = 200 / scale;
+    const double f = 170.0 / scale;
+    for (const View& v : {View{"front", dps::FrontViewSpec(r, "left", "right", vw, vh, f), "left"},
+                          View{"side", dps::SideViewSpec(dps::Side::kLeft, vw, vh, f), "left"}}) {
+      std::unique_ptr<dps::VirtualView> view;
+      cv::Mat out;
+      const auto [build_ms, remap_ms] = MedianMs(
+          9, [&] { view = std::make_unique<dps::VirtualView>(r.Camera(v.camera), v.spec); },
+          [&] { view->Render(omni, out); });
+      std::printf("| %dx%d | %s | %dx%d | %.3f | %.2f |\n", ow, oh, v.name, vw, vh, remap_ms, build_ms);
     }
   }
   return 0;

@@ -57,9 +57,13 @@ struct StripeBuffers {
 };
 
 // Everything one pyramid level needs between calls.
+struct PrefilterBuffers {
+  cv::Mat f, blurred, log, shifted;
+};
+
 struct LevelBuffers {
-  cv::Mat f, blurred, log, shifted;  // prefilter temporaries
-  cv::Mat left, right, magnitude, mean, textured, out;
+  PrefilterBuffers scratch_left, scratch_right;
+  cv::Mat left, right, magnitude, window_sum, textured, out;
   std::vector<StripeBuffers> stripes;
 };
 
@@ -105,12 +109,13 @@ void StereoOptions::Check() const {
 namespace {
 
 // The LoG prefilter into `out`, reusing the temporaries in `buf`.
-void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap, LevelBuffers& buf,
-                      cv::Mat& out) {
+void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap,
+                      PrefilterBuffers& buf, cv::Mat& out) {
   // In floating point: blurring into 8 bits first would quantise the image, and the Laplacian
   // would amplify the rounding into noise that swamps weak texture.
   grey.convertTo(buf.f, CV_32F);
-  cv::GaussianBlur(buf.f, buf.blurred, cv::Size(), sigma_px, sigma_px, cv::BORDER_REPLICATE);
+  const int ksize = 2 * static_cast<int>(std::ceil(3.0 * sigma_px)) + 1;  // +-3 sigma
+  cv::GaussianBlur(buf.f, buf.blurred, cv::Size(ksize, ksize), sigma_px, sigma_px, cv::BORDER_REPLICATE);
   cv::Laplacian(buf.blurred, buf.log, CV_32F, 1, gain, 0.0, cv::BORDER_REPLICATE);
   // Clamp to +-cap and offset by cap: round to 8 bits around 128 (saturating), then a table.
   buf.log.convertTo(buf.shifted, CV_8U, 1.0, 128.0);
@@ -122,7 +127,7 @@ void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap
 }  // namespace
 
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap) {
-  LevelBuffers buf;
+  PrefilterBuffers buf;
   cv::Mat out;
   LogPrefilterInto(grey, sigma_px, gain, cap, buf, out);
   return out;
@@ -139,12 +144,19 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
                                               int n, int level) {
   const StereoOptions& o = options_;
   LevelBuffers& buf = ws_->levels[level];
-  LogPrefilterInto(left, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, buf, buf.left);
-  LogPrefilterInto(right, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, buf, buf.right);
+  // Both images at once (OpenCV runs the filters inside serially then).
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& r) {
+    for (int i = r.start; i < r.end; ++i) {
+      LogPrefilterInto(i == 0 ? left : right, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap,
+                       i == 0 ? buf.scratch_left : buf.scratch_right, i == 0 ? buf.left : buf.right);
+    }
+  });
+  // Interest operator: the window's sum of |LoG| (16-bit, exact) against threshold x area.
   cv::absdiff(buf.left, cv::Scalar(o.prefilter_cap), buf.magnitude);
-  cv::boxFilter(buf.magnitude, buf.mean, CV_32F, cv::Size(o.block_width, o.block_height),
-                cv::Point(-1, -1), true, cv::BORDER_REPLICATE);
-  cv::compare(buf.mean, o.texture_threshold, buf.textured, cv::CMP_GE);
+  cv::boxFilter(buf.magnitude, buf.window_sum, CV_16U, cv::Size(o.block_width, o.block_height),
+                cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
+  cv::compare(buf.window_sum, std::ceil(o.texture_threshold * o.block_width * o.block_height - 1e-9),
+              buf.textured, cv::CMP_GE);
   const int w = left.cols, h = left.rows;
   cv::Mat& out = buf.out;
   out.create(h, w, CV_32F);
@@ -176,8 +188,8 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
   in.left_right_max_diff = o.left_right_max_diff;
   const int y_lo = in.rh, y_hi = h - in.rh;  // rows [y_lo, y_hi)
   if (in.x_hi < in.x_lo || y_hi <= y_lo) return out;
-  // A few stripes per thread: each starts with a full window of rows, so fewer is cheaper.
-  const int stripes = std::max(1, std::min((y_hi - y_lo) / 32, 2 * cv::getNumThreads()));
+  // One stripe per thread: each starts with a full window of rows, so fewer is cheaper.
+  const int stripes = std::max(1, std::min((y_hi - y_lo) / 32, cv::getNumThreads()));
   buf.stripes.resize(std::max<size_t>(buf.stripes.size(), stripes));
   cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
     for (int s = r.start; s < r.end; ++s) {
@@ -216,15 +228,18 @@ cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_i
   const cv::Mat& coarse = ComputeLevel(left_half, right_half, d_min_half, d_max_half - d_min_half + 1, 1);
   const float d_lo = static_cast<float>(o.min_disparity);
   const float d_hi = static_cast<float>(o.min_disparity + o.num_disparities - 1);
-  for (int y = 0; y < fine.rows; ++y) {
-    float* f = fine.ptr<float>(y);
-    const float* c = coarse.ptr<float>(std::min(y / 2, coarse.rows - 1));
-    for (int x = 0; x < fine.cols; ++x) {
-      if (std::isfinite(f[x])) continue;
-      const float d = 2.0f * c[std::min(x / 2, coarse.cols - 1)];
-      if (std::isfinite(d) && d >= d_lo && d <= d_hi) f[x] = d;
+  cv::parallel_for_(cv::Range(0, fine.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      float* f = fine.ptr<float>(y);
+      const float* c = coarse.ptr<float>(std::min(y / 2, coarse.rows - 1));
+      const int last = coarse.cols - 1;
+      for (int x = 0; x < fine.cols; ++x) {
+        if (f[x] != kInvalidDisparity) continue;
+        const float d = 2.0f * c[std::min(x >> 1, last)];
+        if (d >= d_lo && d <= d_hi) f[x] = d;  // false for the invalid +inf
+      }
     }
-  }
+  });
   return fine;
 }
 

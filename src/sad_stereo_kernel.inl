@@ -52,7 +52,14 @@ void AddRow(const SadKernelInput& in, const std::uint8_t* left_row, const std::u
     std::uint16_t* h = hsad + static_cast<std::size_t>(x) * np;
     const std::uint8_t* r = right_padded + in.pad + x - d_max;
     const int l = left_row[x];
-    for (int k = 0; k < np; ++k) h[k] = static_cast<std::uint16_t>(h[k] + Abs(l - r[k]));
+    int k = 0;
+#if CV_SIMD
+    const Cost vl = cv::vx_setall_u16(static_cast<std::uint16_t>(l));
+    for (; k < np; k += kLanes) {
+      cv::v_store(h + k, cv::vx_load(h + k) + cv::v_absdiff(vl, cv::vx_load_expand(r + k)));
+    }
+#endif
+    for (; k < np; ++k) h[k] = static_cast<std::uint16_t>(h[k] + Abs(l - r[k]));
   }
 }
 
