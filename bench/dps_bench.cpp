@@ -60,24 +60,25 @@ int main(int argc, char** argv) {
   const int runs = 31;
   std::printf("OpenCV %s, %d threads, %u hardware threads; median of %d runs\n\n", CV_VERSION,
               cv::getNumThreads(), std::thread::hardware_concurrency(), runs);
-  std::printf("| size | D | block | LR check | dps ms | StereoBM ms | ratio dps/BM |\n");
-  std::printf("| --- | --- | --- | --- | --- | --- | --- |\n");
+  std::printf("| size | D | block | LR check | dps levels | dps ms | StereoBM ms | ratio dps/BM |\n");
+  std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
   struct Case { int w, h, d; };
   for (const Case c : {Case{320, 240, 64}, Case{640, 480, 64}, Case{1024, 768, 128}}) {
     cv::Mat l, r;
     cv::resize(left, l, cv::Size(c.w, c.h), 0, 0, cv::INTER_AREA);
     cv::resize(right, r, cv::Size(c.w, c.h), 0, 0, cv::INTER_AREA);
-    for (const bool lr : {false, true}) {
+    for (const auto [lr, levels] : {std::pair{false, 2}, std::pair{true, 2}, std::pair{true, 1}}) {
       dps::StereoOptions o;
       o.num_disparities = c.d;
       o.left_right_check = lr;
+      o.two_levels = levels == 2;
       dps::SadStereoMatcher matcher(o);
       auto bm = cv::StereoBM::create(c.d, 9);
       bm->setDisp12MaxDiff(lr ? 1 : -1);
       cv::Mat out;
       const auto [dps_ms, bm_ms] = MedianMs(runs, [&] { matcher.Compute(l, r); }, [&] { bm->compute(l, r, out); });
-      std::printf("| %dx%d | %d | 9 | %s | %.2f | %.2f | %.2f |\n", c.w, c.h, c.d, lr ? "yes" : "no",
-                  dps_ms, bm_ms, dps_ms / bm_ms);
+      std::printf("| %dx%d | %d | 9 | %s | %d | %.2f | %.2f | %.2f |\n", c.w, c.h, c.d, lr ? "yes" : "no",
+                  levels, dps_ms, bm_ms, dps_ms / bm_ms);
     }
   }
 
