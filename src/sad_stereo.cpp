@@ -63,7 +63,7 @@ struct PrefilterBuffers {
 
 struct LevelBuffers {
   PrefilterBuffers scratch_left, scratch_right;
-  cv::Mat left, right, magnitude, window_sum, textured, out;
+  cv::Mat left, right, gradient, magnitude, window_sum, textured, out;
   std::vector<StripeBuffers> stripes;
 };
 
@@ -151,8 +151,12 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
                        i == 0 ? buf.scratch_left : buf.scratch_right, i == 0 ? buf.left : buf.right);
     }
   });
-  // Interest operator: the window's sum of |LoG| (16-bit, exact) against threshold x area.
-  cv::absdiff(buf.left, cv::Scalar(o.prefilter_cap), buf.magnitude);
+  // Interest operator: matching along rows needs structure along the rows, so the measure is the
+  // window's mean horizontal change of the LoG image, |LoG(x + 1) - LoG(x - 1)|: zero in uniform
+  // areas and along horizontal edges (where every disparity fits), large on texture. The
+  // window's sum (16-bit, exact) is compared with threshold x area.
+  cv::Sobel(buf.left, buf.gradient, CV_16S, 1, 0, 1, 1.0, 0.0, cv::BORDER_REPLICATE);
+  cv::convertScaleAbs(buf.gradient, buf.magnitude);
   cv::boxFilter(buf.magnitude, buf.window_sum, CV_16U, cv::Size(o.block_width, o.block_height),
                 cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
   cv::compare(buf.window_sum, std::ceil(o.texture_threshold * o.block_width * o.block_height - 1e-9),

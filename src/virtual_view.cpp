@@ -130,6 +130,34 @@ const VirtualView& SideViewCache::Get(double yaw_rad) {
   return *views_.front().second;
 }
 
+cv::Mat OwnCarMask(const VirtualView& view, const Vehicle& vehicle, double height_m) {
+  const ViewSpec& s = view.spec();
+  const Eigen::Vector3d o = view.viewpoint_vehicle();
+  const Eigen::Vector3d lo(-vehicle.width_m / 2, -height_m, -vehicle.length_m / 2);
+  const Eigen::Vector3d hi(vehicle.width_m / 2, 0.0, vehicle.length_m / 2);
+  cv::Mat mask(s.height, s.width, CV_8U, cv::Scalar(0));
+  for (int y = 0; y < s.height; ++y) {
+    for (int x = 0; x < s.width; ++x) {
+      const Eigen::Vector3d d = view.RayVehicle(x, y);
+      double t0 = 0.0, t1 = 1e9;
+      bool hit = true;
+      for (int k = 0; k < 3 && hit; ++k) {
+        if (std::abs(d[k]) < 1e-12) {
+          hit = o[k] >= lo[k] && o[k] <= hi[k];
+          continue;
+        }
+        double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
+        if (a > b) std::swap(a, b);
+        t0 = std::max(t0, a);
+        t1 = std::min(t1, b);
+        hit = t0 <= t1;
+      }
+      if (hit) mask.at<std::uint8_t>(y, x) = 255;
+    }
+  }
+  return mask;
+}
+
 VerticalOffset EstimateVerticalOffset(const cv::Mat& left_in, const cv::Mat& right_in,
                                       int min_disparity, int num_disparities, double max_offset_px) {
   cv::Mat left = left_in, right = right_in;

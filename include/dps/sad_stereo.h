@@ -17,8 +17,8 @@
 //    columns and along the row, so the cost per pixel and disparity does not grow with the window;
 //    OpenCV universal intrinsics over the disparities, cv::parallel_for_ over stripes of rows.
 // 3. The best disparity, refined to sub-pixel by a V (equiangular) fit to its neighbours' costs; an
-//    interest operator (the window's mean |LoG| must reach texture_threshold) rejects uniform
-//    areas; a uniqueness test rejects ambiguous minima; a left-right check compares with the best
+//    interest operator (the window's mean horizontal change of the LoG image must reach
+//    texture_threshold) rejects uniform areas and horizontal edges; a uniqueness test rejects ambiguous minima; a left-right check compares with the best
 //    match seen from the right image.
 // 4. Two levels: the same search on half-resolution images fills pixels the full-resolution level
 //    left invalid (low texture), with twice the coarse disparity.
@@ -44,7 +44,7 @@ struct StereoOptions {
   double log_sigma_px = 1.0;    // Gaussian of the LoG prefilter, px; > 0
   double prefilter_gain = 6.0;  // LoG response scale before the clamp (grey levels), > 0
   int prefilter_cap = 31;       // clamp of the scaled LoG response, 1..63
-  double texture_threshold = 1.0;  // interest operator: min mean |clamped LoG| in the window, >= 0
+  double texture_threshold = 1.0;  // interest operator: min mean |LoG(x+1) - LoG(x-1)| in the window, >= 0
   double uniqueness_ratio = 10.0;  // % by which the best cost must beat any non-adjacent one, 0..100
   bool left_right_check = true;    // reject pixels whose right-image match disagrees
   double left_right_max_diff = 1.0;  // px, >= 0

@@ -106,6 +106,11 @@ class SideViewCache {
   std::list<std::pair<long, std::unique_ptr<VirtualView>>> views_;  // most recent first
 };
 
+// CV_8U, 255 where the view pixel's ray meets the own car, modelled as a box of the rig's
+// vehicle length and width and `height_m` (metres above the road) around the vehicle origin:
+// the bonnet and doors that every mirror-mounted camera sees, which must not count as obstacles.
+cv::Mat OwnCarMask(const VirtualView& view, const Vehicle& vehicle, double height_m);
+
 // The vertical misalignment of a rectified pair: the median row shift of the right view relative
 // to the left (positive = the right view shows things lower), measured at corners of the left
 // view by template matching over the disparity range and +-max_offset_px rows, to sub-pixel.

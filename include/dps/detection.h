@@ -1,0 +1,35 @@
+// dps — obstacle detections on the ground plane, the unit of detections.csv (DESIGN.md §3.4).
+//
+// A detection is one obstacle component of one source in one frame, described by the ground
+// points it projected to (vehicle frame of that frame, metres): its point nearest to the vehicle
+// origin (x, z), the range of that point, the extent of all points and their number.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace dps {
+
+struct Detection {
+  int frame = 0;
+  double t_s = 0.0;
+  std::string source;   // "front" (binocular stereo), "left" / "right" (motion stereo)
+  int id = 0;           // index within the frame and source
+  double x_m = 0.0, z_m = 0.0, range_m = 0.0;  // nearest point
+  double x_min_m = 0.0, x_max_m = 0.0, z_min_m = 0.0, z_max_m = 0.0;
+  int n_points = 0;
+  std::vector<Eigen::Vector2d> points;  // ground points (x, z), for the map; not in the CSV
+};
+
+// A detection summarising ground points (at least one): nearest point, extent, count.
+Detection DetectionFromPoints(const std::vector<Eigen::Vector2d>& points, const std::string& source);
+
+// detections.csv: header and one row per detection, written atomically. Throws dps::Error.
+void WriteDetections(const std::vector<Detection>& detections, const std::string& path);
+// Reads detections.csv (columns by name, extra columns ignored). Throws dps::Error naming the
+// file, line and column.
+std::vector<Detection> ReadDetections(const std::string& path);
+
+}  // namespace dps

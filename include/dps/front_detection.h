@@ -1,0 +1,81 @@
+// dps — obstacles in front by binocular stereo (Gandhi & Trivedi 2006, section V-A, eq. 14-16).
+//
+// The rectified front views of the two cameras (virtual_view.h) are matched (sad_stereo.h); the
+// road's disparity d_bg at every view pixel comes from the rig's geometry (the ray meets the
+// ground plane Y = 0 at depth Z_view, d_bg = f B / Z_view), so asymmetric rigs and calibrated
+// rotations are handled exactly. Column histograms (disparity_histogram.h) give the obstacle
+// components; each column of a component, with its centroid disparity d, is a point at depth
+// Z_view = f B / d and lateral X_view = (x - cx) Z_view / f in the view, dropped vertically onto
+// the ground in the vehicle frame (eq. 16, from the real view geometry rather than the paper's
+// symmetric placement).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dps/detection.h"
+#include "dps/disparity_histogram.h"
+#include "dps/rig.h"
+#include "dps/sad_stereo.h"
+#include "dps/virtual_view.h"
+
+namespace dps {
+
+// The matcher settings the detectors use by default: 64 disparities, and an interest threshold of
+// 4.5 (on dps-synth renders, image noise of 2 grey levels on the uniform sky measures about 2.8,
+// the sky-road boundary 2.2, vehicles and asphalt 8-11).
+StereoOptions DetectionStereoOptions();
+
+struct FrontDetectorOptions {
+  int view_width = 400;        // front view size, px
+  int view_height = 200;
+  double focal_px = 170.0;     // front view focal length, px
+  StereoOptions stereo = DetectionStereoOptions();  // its disparity range is the histogram's too
+  HistogramOptions histogram;  // its disparity range is taken from `stereo`
+  double max_range_m = 60.0;   // points farther than this are dropped
+  double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
+  // Components whose pixels reach less than this above the road (median over columns) are flat
+  // (markings, mismatched road) and dropped; metres, >= 0.
+  double min_obstacle_height_m = 0.5;
+};
+
+// Everything one frame's front detection produced, for the map and the diagnostics.
+struct FrontResult {
+  cv::Mat left_view, right_view;  // rectified grey views
+  cv::Mat disparity;              // CV_32F
+  cv::Mat score;                  // eq. 14
+  cv::Mat histogram;              // eq. 15
+  cv::Mat obstacle;               // CV_32F histogram-sized image of centroid disparities, 0 = none
+  std::vector<Detection> detections;  // one per component (frame and t left 0)
+};
+
+class FrontDetector {
+ public:
+  // Builds both views and the road disparity image for the rig's "left" and "right" cameras.
+  FrontDetector(const Rig& rig, const FrontDetectorOptions& options);
+  ~FrontDetector();
+
+  // Detects obstacles in one pair of omni images (grey or BGR, the cameras' sizes).
+  FrontResult Detect(const cv::Mat& left_omni, const cv::Mat& right_omni);
+
+  // The ground point (vehicle frame x, z) of view column x at disparity d (eq. 16); false when d
+  // is not positive.
+  bool ColumnToGround(double x, double disparity, Eigen::Vector2d* ground) const;
+
+  const cv::Mat& road_disparity() const { return road_; }  // CV_32F, inf above the horizon
+  const VirtualView& left_view() const { return *left_; }
+  const VirtualView& right_view() const { return *right_; }
+  double baseline_m() const { return baseline_m_; }
+
+ private:
+  FrontDetectorOptions options_;
+  std::unique_ptr<VirtualView> left_, right_;
+  std::unique_ptr<SadStereoMatcher> matcher_;
+  double baseline_m_ = 0.0;
+  cv::Mat road_, ramp_;
+  cv::Mat ignore_;  // CV_8U, 255 where the left view sees nothing or the own car
+};
+
+}  // namespace dps

@@ -1,0 +1,125 @@
+#include "dps/front_detection.h"
+
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dps/error.h"
+
+namespace dps {
+namespace {
+
+cv::Mat Grey(const cv::Mat& image) {
+  if (image.channels() == 1) return image;
+  cv::Mat grey;
+  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  return grey;
+}
+
+}  // namespace
+
+StereoOptions DetectionStereoOptions() {
+  StereoOptions o;
+  o.num_disparities = 64;
+  o.texture_threshold = 4.5;
+  return o;
+}
+
+FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options) : options_(options) {
+  options_.histogram.min_disparity = options.stereo.min_disparity;
+  options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
+  options_.histogram.two_sided = false;
+  options_.histogram.Check();
+  const ViewSpec spec = FrontViewSpec(rig, "left", "right", options.view_width, options.view_height, options.focal_px);
+  left_ = std::make_unique<VirtualView>(rig.Camera("left"), spec);
+  right_ = std::make_unique<VirtualView>(rig.Camera("right"), spec);
+  matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
+  baseline_m_ = (rig.Camera("right").vehicle_from_camera.t - rig.Camera("left").vehicle_from_camera.t).norm();
+  cv::Mat own = OwnCarMask(*left_, rig.vehicle, options.own_car_height_m);
+  cv::bitwise_or(own, OwnCarMask(*right_, rig.vehicle, options.own_car_height_m), own);
+  cv::bitwise_or(own, left_->mask() == 0, ignore_);
+  // The road's disparity at every pixel of the left view (the reference).
+  road_ = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(kInvalidDisparity));
+  const Eigen::Vector3d origin = left_->viewpoint_vehicle();
+  for (int y = 0; y < spec.height; ++y) {
+    for (int x = 0; x < spec.width; ++x) {
+      const Eigen::Vector3d ray = left_->RayVehicle(x, y);
+      if (ray.y() <= 1e-9 || origin.y() >= 0) continue;  // looks up: no road
+      const Eigen::Vector3d ground = origin + (-origin.y() / ray.y()) * ray;
+      const double depth = (spec.vehicle_from_view.transpose() * (ground - origin)).z();
+      if (depth > 0) road_.at<float>(y, x) = static_cast<float>(spec.focal_px * baseline_m_ / depth);
+    }
+  }
+  ramp_ = RoadRamp(road_, options.stereo.block_height / 2 + 1);
+}
+
+FrontDetector::~FrontDetector() = default;
+
+
+bool FrontDetector::ColumnToGround(double x, double disparity, Eigen::Vector2d* ground) const {
+  if (!(disparity > 0)) return false;
+  const ViewSpec& s = left_->spec();
+  const double depth = s.focal_px * baseline_m_ / disparity;
+  const double lateral = (x - s.cx) * depth / s.focal_px;
+  // The view-frame point (lateral, h, depth) whose vehicle-frame height is 0 (the ground): the
+  // vertical line of the column at that depth, dropped onto the road (eq. 16).
+  const Eigen::Matrix3d& R = s.vehicle_from_view;
+  const Eigen::Vector3d& t = left_->viewpoint_vehicle();
+  const double h = std::abs(R(1, 1)) > 1e-9 ? -(t.y() + R(1, 0) * lateral + R(1, 2) * depth) / R(1, 1) : 0.0;
+  const Eigen::Vector3d p = t + R * Eigen::Vector3d(lateral, h, depth);
+  *ground = Eigen::Vector2d(p.x(), p.z());
+  return true;
+}
+
+FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right_omni) {
+  FrontResult r;
+  left_->Render(Grey(left_omni), r.left_view);
+  right_->Render(Grey(right_omni), r.right_view);
+  r.disparity = matcher_->Compute(r.left_view, r.right_view);
+  r.disparity.setTo(kInvalidDisparity, ignore_);
+  r.score = ScoreImage(r.disparity, road_, options_.histogram, ramp_);
+  cv::Mat moments, labels;
+  r.histogram = ColumnHistogram(r.disparity, r.score, options_.histogram, &moments);
+  const std::vector<HistogramComponent> components =
+      FindComponents(r.histogram, options_.histogram, &labels, moments);
+  r.obstacle = cv::Mat(r.histogram.size(), CV_32F, cv::Scalar(0));
+  int id = 0;
+  const HistogramOptions& ho = options_.histogram;
+  for (const HistogramComponent& c : components) {
+    // An obstacle stands up from the road: in each column it fills many rows with its disparity
+    // (rows ~ height * d / B). Flat things (lane markings, road matched wrongly) and stray matches
+    // fill few. Height per column = contributing rows * B / d; the component's is the median.
+    std::vector<double> heights;
+    for (int x = c.x_begin; x < c.x_end; ++x) {
+      const float d = c.column_disparity[x - c.x_begin];
+      if (!std::isfinite(d) || d <= 0) continue;
+      int rows = 0;
+      for (int y = 0; y < r.disparity.rows; ++y) {
+        const float v = r.disparity.at<float>(y, x);
+        if (!std::isfinite(v) || r.score.at<float>(y, x) <= 0) continue;
+        const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
+        rows += bin >= 0 && bin < labels.rows && labels.at<int>(bin, x) == c.label;
+      }
+      heights.push_back(rows * baseline_m_ / d);
+    }
+    if (heights.empty()) continue;
+    std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
+    if (heights[heights.size() / 2] < options_.min_obstacle_height_m) continue;
+    std::vector<Eigen::Vector2d> points;
+    for (int x = c.x_begin; x < c.x_end; ++x) {
+      const float d = c.column_disparity[x - c.x_begin];
+      Eigen::Vector2d g;
+      if (!std::isfinite(d) || !ColumnToGround(x, d, &g) || g.norm() > options_.max_range_m) continue;
+      points.push_back(g);
+      const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);
+      if (row >= 0 && row < r.obstacle.rows) r.obstacle.at<float>(row, x) = d;
+    }
+    if (points.empty()) continue;
+    Detection det = DetectionFromPoints(points, "front");
+    det.id = id++;
+    r.detections.push_back(std::move(det));
+  }
+  return r;
+}
+
+}  // namespace dps
