@@ -1,0 +1,76 @@
+// dps — obstacles at the sides by motion stereo (Gandhi & Trivedi 2006, section V-B, eq. 17-18).
+//
+// One camera's side views of two consecutive frames form the stereo pair; the camera moved
+// between them by the ego motion (from CAN speed and yaw rate). Both views lie in the vertical
+// plane parallel to that displacement (section V-C: turning), so they are rectified with the
+// displacement as baseline. Static things then have disparity f B / depth; vehicles moving with
+// us have less, overtaking ones negative disparity, hence a disparity range shifted below zero
+// (the paper's fixed offset). The road's disparity at every pixel follows from the geometry; the
+// score counts distance from it in either direction. Column histograms give the components;
+// each component's pixels are traced back in the disparity image and, per column, the
+// bottom-most one is taken as the object's contact with the ground: its ray meets the road
+// plane (eq. 17-18, from the real view geometry). Points are reported in the vehicle frame of the
+// current frame.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dps/detection.h"
+#include "dps/disparity_histogram.h"
+#include "dps/ego_motion.h"
+#include "dps/rig.h"
+#include "dps/sad_stereo.h"
+#include "dps/virtual_view.h"
+
+namespace dps {
+
+struct SideDetectorOptions {
+  int view_width = 400;        // side view size, px
+  int view_height = 200;
+  double focal_px = 170.0;
+  StereoOptions stereo;        // default: 64 disparities from -16 (overtaking vehicles)
+  HistogramOptions histogram;  // its range is the stereo range; scored two-sided
+  double max_range_m = 40.0;   // points farther than this are dropped
+  double own_car_height_m = 0.9;
+  double min_baseline_m = 0.05;       // camera displacement below this: no motion stereo
+  double min_obstacle_height_m = 0.5; // components lower than this (median) are dropped
+
+  SideDetectorOptions();
+};
+
+struct SideResult {
+  bool skipped = false;        // no motion stereo this frame (see reason)
+  std::string reason;
+  cv::Mat reference_view, other_view;  // the pair as matched (reference = left image)
+  cv::Mat disparity, score, histogram;
+  cv::Mat obstacle;            // CV_8U reference-view image, 255 at the bottom-most pixels
+  double baseline_m = 0.0;
+  std::vector<Detection> detections;   // source = the camera's name
+};
+
+class SideDetector {
+ public:
+  // `camera`: the rig camera looking to `side` ("left" camera, Side::kLeft, usually).
+  SideDetector(const Rig& rig, const std::string& camera, Side side, const SideDetectorOptions& options);
+  ~SideDetector();
+
+  // Detects obstacles from the previous and the current omni image of the camera;
+  // `current_in_previous` is the vehicle's pose at the current frame in the previous frame's
+  // vehicle frame (MotionProfile::Integrate over the frame interval).
+  SideResult Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
+                    const PlanarPose& current_in_previous);
+
+ private:
+  RigCamera camera_;
+  Side side_;
+  Vehicle vehicle_;
+  SideDetectorOptions options_;
+  std::unique_ptr<SideViewCache> views_;
+  std::unique_ptr<SadStereoMatcher> matcher_;
+};
+
+}  // namespace dps
