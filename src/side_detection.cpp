@@ -33,6 +33,7 @@ SideDetectorOptions::SideDetectorOptions() {
   stereo = DetectionStereoOptions();
   stereo.min_disparity = -16;
   histogram.two_sided = true;
+  histogram.min_columns = 10;  // nearby vehicles fill much of a side view; small blobs are road
 }
 
 SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,

@@ -187,9 +187,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
     }
     AtomicOutputFile frames_csv((tmp / "frames.csv").string());
     frames_csv.stream() << "frame,t\n";
-    AtomicOutputFile truth_csv((tmp / "truth.csv").string());
-    truth_csv.stream() << "frame,t,id,kind,x,z,heading_deg,length,width,height,vx,vz\n";
-
+    std::vector<TruthRow> truth;
     std::vector<std::string> names;
     for (const RigCamera& c : scene.rig.cameras) {
       names.push_back(c.name);
@@ -215,12 +213,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
       const double t = scene.FrameTime(f);
       const FrameState state = renderer.StateAt(t);
       frames_csv.stream() << f << "," << t << "\n";
-      for (const TruthRow& r : TruthAt(state, f)) {
-        truth_csv.stream() << r.frame << "," << r.t_s << "," << r.id << "," << r.kind << ","
-                           << r.x_m << "," << r.z_m << "," << r.heading_deg << "," << r.length_m
-                           << "," << r.width_m << "," << r.height_m << "," << r.vx_mps << ","
-                           << r.vz_mps << "\n";
-      }
+      for (const TruthRow& r : TruthAt(state, f)) truth.push_back(r);
       for (size_t c = 0; c < names.size(); ++c) {
         const RenderedView view = renderer.Render(state, c, f);
         if (options.write_png) WriteImageAtomically((tmp / names[c] / FrameName(f)).string(), view.image);
@@ -238,7 +231,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
       if (options.progress) options.progress(f + 1, frames);
     }
     frames_csv.Commit();
-    truth_csv.Commit();
+    WriteTruth(truth, (tmp / "truth.csv").string());
     for (size_t c = 0; c < videos.size(); ++c) {
       videos[c]->release();
       RenameReplacing(video_tmp[c], (tmp / (names[c] + ".avi")).string());

@@ -14,22 +14,11 @@
 #include <vector>
 
 #include "dps/marks_io.h"
+#include "dps/truth.h"
 #include "dps/scene.h"
 #include "dps/scene_renderer.h"
 
 namespace dps {
-
-// One row of truth.csv (DESIGN.md §3.6).
-struct TruthRow {
-  int frame = 0;
-  double t_s = 0.0;
-  int id = 0;
-  std::string kind;
-  double x_m = 0.0, z_m = 0.0;  // footprint centre, vehicle frame at that frame
-  double heading_deg = 0.0;     // from the vehicle's +Z to the object's length axis, towards +X
-  double length_m = 0.0, width_m = 0.0, height_m = 0.0;
-  double vx_mps = 0.0, vz_mps = 0.0;  // ground velocity in the vehicle frame
-};
 
 // The truth rows of every object at one instant.
 std::vector<TruthRow> TruthAt(const FrameState& state, int frame);

@@ -1,0 +1,80 @@
+// dps — scoring detections against ground truth (DESIGN.md §5), as dps-eval and the regression
+// tests do.
+//
+// Per frame, a truth object counts when its near point (the footprint point nearest to the
+// vehicle origin) lies within max_range_m and inside the processed field of view (Coverage); a
+// detection is in the zone under the same rule for its (x, z). A detection matches an object when
+// its (x, z) lies within max(0.75 m, 0.1 * range of the object's near point) of the footprint
+// (0 inside); pairs are taken nearest first, each object and each detection at most once.
+// recall = matched objects / counted objects; precision = matched detections / detections in the
+// zone; range error = |detection range - near-point range|, per band of the near point's range.
+//
+// Field of view: the pipeline's views are sectors on the ground, each an apex (the viewpoint,
+// or the front pair's midpoint), a direction and a half-angle (atan of half the view width over
+// the focal length). Without a coverage every direction counts.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "dps/detection.h"
+#include "dps/truth.h"
+
+namespace dps {
+
+struct Sector {
+  std::string name;               // "front", "left", "right"
+  Eigen::Vector2d apex{0, 0};     // vehicle frame (x, z)
+  double direction_rad = 0.0;     // from +Z towards +X
+  double half_angle_rad = 0.0;
+};
+
+struct Coverage {
+  std::vector<Sector> sectors;  // empty = everything
+  bool Contains(const Eigen::Vector2d& point) const;
+};
+
+struct EvaluationOptions {
+  double max_range_m = 20.0;   // > 0
+  Coverage coverage;
+};
+
+struct BandScore {
+  std::string name;            // "0-10", ...
+  double lo_m = 0, hi_m = 0;
+  int objects = 0, matched_objects = 0;
+  int detections = 0, matched_detections = 0;
+  std::vector<double> range_errors_m;
+  double Recall() const;       // 1 when there is no object
+  double Precision() const;    // 1 when there is no detection
+  double MedianRangeError() const;  // NaN when no match
+  double RangeErrorP90() const;
+  double MedianRelativeRangeError() const;  // |error| / object range, NaN when no match
+  std::vector<double> relative_errors;
+};
+
+struct SourceScore {
+  std::string source;
+  int detections = 0, matched = 0;  // in the zone
+  double Precision() const;
+};
+
+struct EvaluationResult {
+  BandScore overall;                 // all objects / detections in the zone
+  std::vector<BandScore> bands;      // 0-10, 10-20, 20-30, 30-50 m (object near-point range)
+  std::vector<SourceScore> sources;  // front, left, right
+  int frames = 0;                    // frames with truth rows or detections
+  int frames_with_detections = 0;    // frames with at least one detection in the zone
+};
+
+// Scores detections against truth (frames matched by index).
+EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
+                          const EvaluationOptions& options);
+
+// A table for people (per band and per source) and a JSON document for scripts.
+std::string EvaluationTable(const EvaluationResult& result);
+std::string EvaluationJson(const EvaluationResult& result);
+
+}  // namespace dps

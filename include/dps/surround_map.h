@@ -1,0 +1,28 @@
+// dps — the surround map picture: a top-down view of the vehicle frame with the own car (black),
+// the detected obstacles (red), range rings and a scale, and the ground each source covers
+// lightly shaded (Gandhi & Trivedi 2006, section V-C, Fig. 1 and 7).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dps/detection.h"
+#include "dps/evaluation.h"
+#include "dps/rig.h"
+
+namespace dps {
+
+struct MapOptions {
+  int size_px = 600;       // square picture, > 0
+  double range_m = 30.0;   // from the centre to the border, > 0
+  double ring_step_m = 5.0;
+};
+
+// The map for one frame. Obstacles are drawn as their ground points joined in order and thickened
+// by a closing in the picture (the paper's morphological smoothing, erring towards the car).
+cv::Mat DrawSurroundMap(const std::vector<Detection>& detections, const Vehicle& vehicle,
+                        const Coverage& coverage, const MapOptions& options, const std::string& caption);
+
+}  // namespace dps

@@ -1,0 +1,73 @@
+// dps — one frame of the Dynamic Panoramic Surround map (Gandhi & Trivedi 2006, section V-C):
+// front obstacles by binocular stereo, left and right obstacles by motion stereo, all on the
+// ground plane of the current vehicle frame.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dps/evaluation.h"
+#include "dps/front_detection.h"
+#include "dps/side_detection.h"
+
+namespace dps {
+
+struct PipelineOptions {
+  FrontDetectorOptions front;
+  SideDetectorOptions side;
+  bool sides = true;           // run motion stereo on the side views
+};
+
+// Options scaled to the rig's image size: at 640 px wide omni images, 400x200 views with a focal
+// length of 170 px (about the omni image's own resolution near the horizon), 64 disparities and
+// 9x9 windows; proportionally smaller views, ranges (multiples of 16) and windows for smaller
+// images (e.g. 200x100, f = 85 px, 32 disparities, 7x7 at the paper's 320x240).
+PipelineOptions DefaultPipelineOptions(const Rig& rig);
+
+// The ground sectors the pipeline's views cover (for the map and for dps-eval's field of view):
+// the front pair from the cameras' midpoint, each side view from its camera.
+Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& options);
+
+// One frame's input: both omni images and, for motion stereo, the vehicle's motion since the
+// previous frame (unknown for the first frame, or when the CAN log has no data for it).
+struct FrameInput {
+  int frame = 0;
+  double t_s = 0.0;
+  cv::Mat left, right;
+  bool motion_known = false;
+  PlanarPose current_in_previous;  // vehicle pose now, in the previous frame's vehicle frame
+};
+
+struct FrameOutput {
+  std::vector<Detection> detections;  // all sources, frame and t filled in
+  FrontResult front;
+  SideResult left, right;
+  std::vector<std::string> warnings;
+  double front_ms = 0.0, sides_ms = 0.0;  // time spent per stage
+};
+
+class SurroundPipeline {
+ public:
+  SurroundPipeline(const Rig& rig, const PipelineOptions& options);
+  ~SurroundPipeline();
+
+  // Processes the next frame (frames must come in order; the previous images are kept for
+  // motion stereo).
+  FrameOutput Process(const FrameInput& input);
+
+  const Rig& rig() const { return rig_; }
+  const Coverage& coverage() const { return coverage_; }
+
+ private:
+  Rig rig_;
+  PipelineOptions options_;
+  Coverage coverage_;
+  std::unique_ptr<FrontDetector> front_;
+  std::unique_ptr<SideDetector> left_, right_;
+  cv::Mat previous_left_, previous_right_;
+};
+
+}  // namespace dps

@@ -1,0 +1,194 @@
+#include "dps/drive_processing.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "dps/atomic_file.h"
+#include "dps/error.h"
+#include "dps/rig_io.h"
+
+namespace dps {
+namespace {
+
+namespace fs = std::filesystem;
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+}  // namespace
+
+std::string DriveSummary::ToJson() const {
+  std::ostringstream o;
+  o.precision(6);
+  o << "{\n  \"drive\": " << JsonString(drive) << ",\n  \"frames\": " << frames
+    << ",\n  \"frames_without_motion\": " << frames_without_motion << ",\n  \"detections\": " << detections
+    << ",\n  \"seconds\": " << seconds << ",\n  \"frames_per_second\": " << frames_per_second
+    << ",\n  \"stage_seconds\": {";
+  bool first = true;
+  for (const auto& [k, v] : stage_seconds) {
+    o << (first ? "" : ", ") << JsonString(k) << ": " << v;
+    first = false;
+  }
+  o << "},\n  \"warnings\": [";
+  for (size_t i = 0; i < warnings.size(); ++i) o << (i ? ", " : "") << JsonString(warnings[i]);
+  o << "]\n}\n";
+  return o.str();
+}
+
+std::string DriveOutputDir(const std::string& drive_dir, const std::string& out_root) {
+  fs::path d = fs::path(drive_dir);
+  if (d.filename().empty()) d = d.parent_path();
+  return (fs::path(out_root) / d.filename()).string();
+}
+
+bool DriveOutputComplete(const std::string& output_dir) {
+  return fs::exists(fs::path(output_dir) / "summary.json");
+}
+
+DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_root, const DriveOptions& o,
+                          const std::function<void(int, int)>& progress) {
+  const auto start = Clock::now();
+  DriveSummary s;
+  s.output_dir = DriveOutputDir(drive_dir, out_root);
+  s.drive = fs::path(s.output_dir).filename().string();
+  if (!fs::is_directory(drive_dir)) throw Error(Str(drive_dir, ": not a folder"));
+  const Rig rig = ReadRig((fs::path(drive_dir) / "rig.yaml").string());
+  std::unique_ptr<FrameSource> left = FrameSource::Open(drive_dir, "left");
+  std::unique_ptr<FrameSource> right = FrameSource::Open(drive_dir, "right");
+  int frames = left->count();
+  if (left->count() != right->count()) {
+    if (!o.truncate) {
+      throw Error(Str(drive_dir, ": ", left->description(), " has ", left->count(), " frames, ",
+                      right->description(), " has ", right->count(), " (--truncate uses the shorter)"));
+    }
+    frames = std::min(left->count(), right->count());
+    s.warnings.push_back(Str("left and right differ in length; truncated to ", frames, " frames"));
+  }
+  // Frame times.
+  std::vector<double> times;
+  const fs::path frames_csv = fs::path(drive_dir) / "frames.csv";
+  if (fs::exists(frames_csv)) {
+    times = ReadFrameTimes(frames_csv.string());
+    if (static_cast<int>(times.size()) < frames) {
+      throw Error(Str(frames_csv.string(), ": ", times.size(), " frames listed, the videos have ", frames));
+    }
+  } else {
+    const double fps = left->fps() > 0 ? left->fps() : o.image_fps;
+    for (int i = 0; i < frames; ++i) times.push_back(i / fps);
+  }
+  const CanLog can = ReadCanLog((fs::path(drive_dir) / "can.csv").string(), o.can);
+  for (const std::string& w : can.warnings) s.warnings.push_back(w);
+
+  // Outputs under a temporary name.
+  fs::create_directories(out_root);
+  const fs::path tmp = fs::path(out_root) / Str(".", s.drive, ".tmp-", ::getpid());
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  try {
+    SurroundPipeline pipeline(rig, o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline);
+    std::vector<Detection> detections;
+    cv::VideoWriter video;
+    const std::string video_tmp = (tmp / ".map.tmp.avi").string();
+    if (o.map_video) {
+      video.open(video_tmp, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                 frames > 1 ? std::max(1.0, (frames - 1) / std::max(1e-6, times[frames - 1] - times[0])) : 10.0,
+                 cv::Size(o.map.size_px, o.map.size_px));
+      if (!video.isOpened()) {
+        s.warnings.push_back("no MJPG video encoder; writing map/ PNGs instead");
+      }
+    }
+    const bool png = o.map_png || (o.map_video && !video.isOpened());
+    if (png) fs::create_directories(tmp / "map");
+    double decode = 0, front = 0, sides = 0, map_s = 0, write = 0;
+    cv::Mat l, r;
+    for (int f = 0; f < frames; ++f) {
+      auto t0 = Clock::now();
+      if (!left->Read(&l) || !right->Read(&r)) {
+        throw Error(Str(drive_dir, ": frame ", f, " could not be read (the stream ended early)"));
+      }
+      if (l.size() != r.size()) {
+        throw Error(Str(drive_dir, ": frame ", f, ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
+      }
+      if (l.cols != rig.Camera("left").model.width() || l.rows != rig.Camera("left").model.height()) {
+        throw Error(Str(drive_dir, ": frame ", f, " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
+                        rig.Camera("left").model.width(), "x", rig.Camera("left").model.height()));
+      }
+      auto t1 = Clock::now();
+      decode += Seconds(t0, t1);
+      FrameInput in;
+      in.frame = f;
+      in.t_s = times[f];
+      in.left = l;
+      in.right = r;
+      if (f > 0) {
+        std::string why;
+        in.motion_known = MotionBetween(can, times[f - 1], times[f], &in.current_in_previous, &why);
+        if (!in.motion_known) {
+          ++s.frames_without_motion;
+          s.warnings.push_back(Str("frame ", f, ": no known motion (", why, "); side detection skipped"));
+        }
+      }
+      FrameOutput out = pipeline.Process(in);
+      front += out.front_ms / 1000.0;
+      sides += out.sides_ms / 1000.0;
+      auto t2 = Clock::now();
+      char caption[128];
+      std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
+                    out.detections.size());
+      const cv::Mat map = DrawSurroundMap(out.detections, rig.vehicle, pipeline.coverage(), o.map, caption);
+      auto t3 = Clock::now();
+      map_s += Seconds(t2, t3);
+      if (video.isOpened()) video.write(map);
+      if (png) {
+        char name[32];
+        std::snprintf(name, sizeof(name), "%06d.png", f);
+        if (!cv::imwrite((tmp / "map" / name).string(), map)) throw Error(Str(s.output_dir, ": cannot write map image"));
+      }
+      write += Seconds(t3, Clock::now());
+      for (Detection& d : out.detections) detections.push_back(std::move(d));
+      if (progress) progress(f + 1, frames);
+    }
+    auto t4 = Clock::now();
+    if (video.isOpened()) {
+      video.release();
+      RenameReplacing(video_tmp, (tmp / "map.avi").string());
+    }
+    WriteDetections(detections, (tmp / "detections.csv").string());
+    write += Seconds(t4, Clock::now());
+    s.frames = frames;
+    s.detections = static_cast<int>(detections.size());
+    s.stage_seconds = {{"decode", decode}, {"front", front}, {"sides", sides}, {"map", map_s}, {"write", write}};
+    s.seconds = Seconds(start, Clock::now());
+    s.frames_per_second = s.seconds > 0 ? frames / s.seconds : 0;
+    WriteFileAtomically((tmp / "summary.json").string(), s.ToJson());  // last: marks completion
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  if (fs::exists(s.output_dir)) fs::remove_all(s.output_dir);
+  fs::rename(tmp, s.output_dir);
+  return s;
+}
+
+}  // namespace dps

@@ -1,0 +1,201 @@
+#include "dps/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace dps {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
+}
+
+std::string Number(double v, int digits = 3) {
+  if (std::isnan(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+}  // namespace
+
+bool Coverage::Contains(const Eigen::Vector2d& p) const {
+  if (sectors.empty()) return true;
+  for (const Sector& s : sectors) {
+    const Eigen::Vector2d d = p - s.apex;
+    double a = std::atan2(d.x(), d.y()) - s.direction_rad;
+    a = std::remainder(a, 2 * kPi);
+    if (std::abs(a) <= s.half_angle_rad) return true;
+  }
+  return false;
+}
+
+double BandScore::Recall() const { return objects ? double(matched_objects) / objects : 1.0; }
+double BandScore::Precision() const { return detections ? double(matched_detections) / detections : 1.0; }
+double BandScore::MedianRangeError() const { return Quantile(range_errors_m, 0.5); }
+double BandScore::RangeErrorP90() const { return Quantile(range_errors_m, 0.9); }
+double BandScore::MedianRelativeRangeError() const { return Quantile(relative_errors, 0.5); }
+double SourceScore::Precision() const { return detections ? double(matched) / detections : 1.0; }
+
+EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
+                          const EvaluationOptions& options) {
+  EvaluationResult result;
+  result.overall.name = "all";
+  result.overall.hi_m = options.max_range_m;
+  const double edges[] = {0, 10, 20, 30, 50};
+  for (int b = 0; b < 4; ++b) {
+    BandScore s;
+    s.lo_m = edges[b];
+    s.hi_m = edges[b + 1];
+    s.name = Number(s.lo_m, 0) + "-" + Number(s.hi_m, 0);
+    result.bands.push_back(s);
+  }
+  for (const char* name : {"front", "left", "right"}) result.sources.push_back({name, 0, 0});
+  auto band_of = [&](double range) -> BandScore* {
+    for (BandScore& b : result.bands) {
+      if (range >= b.lo_m && range < b.hi_m) return &b;
+    }
+    return nullptr;
+  };
+  auto source_of = [&](const std::string& name) -> SourceScore* {
+    for (SourceScore& s : result.sources) {
+      if (s.source == name) return &s;
+    }
+    result.sources.push_back({name, 0, 0});
+    return &result.sources.back();
+  };
+  auto in_zone = [&](const Eigen::Vector2d& p) {
+    return p.norm() <= options.max_range_m && options.coverage.Contains(p);
+  };
+
+  std::map<int, std::vector<const TruthRow*>> truth_by_frame;
+  for (const TruthRow& t : truth) truth_by_frame[t.frame].push_back(&t);
+  std::map<int, std::vector<const Detection*>> det_by_frame;
+  for (const Detection& d : detections) det_by_frame[d.frame].push_back(&d);
+  std::vector<int> frames;
+  for (const auto& [f, v] : truth_by_frame) frames.push_back(f);
+  for (const auto& [f, v] : det_by_frame) frames.push_back(f);
+  std::sort(frames.begin(), frames.end());
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  result.frames = static_cast<int>(frames.size());
+
+  for (const int f : frames) {
+    std::vector<const TruthRow*> objects;
+    for (const TruthRow* t : truth_by_frame[f]) {
+      if (in_zone(NearPoint(*t))) objects.push_back(t);
+    }
+    std::vector<const Detection*> dets;
+    for (const Detection* d : det_by_frame[f]) {
+      if (in_zone({d->x_m, d->z_m})) dets.push_back(d);
+    }
+    if (!dets.empty()) ++result.frames_with_detections;
+    // Candidate pairs within the tolerance, nearest first.
+    struct Pair {
+      double distance;
+      size_t object, detection;
+    };
+    std::vector<Pair> pairs;
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const double range = NearPoint(*objects[i]).norm();
+      const double tolerance = std::max(0.75, 0.1 * range);
+      for (size_t j = 0; j < dets.size(); ++j) {
+        const double d = DistanceToFootprint(*objects[i], {dets[j]->x_m, dets[j]->z_m});
+        if (d <= tolerance) pairs.push_back({d, i, j});
+      }
+    }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+    std::vector<int> object_match(objects.size(), -1), det_match(dets.size(), -1);
+    for (const Pair& p : pairs) {
+      if (object_match[p.object] >= 0 || det_match[p.detection] >= 0) continue;
+      object_match[p.object] = static_cast<int>(p.detection);
+      det_match[p.detection] = static_cast<int>(p.object);
+    }
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const double range = NearPoint(*objects[i]).norm();
+      for (BandScore* b : {&result.overall, band_of(range)}) {
+        if (!b) continue;
+        ++b->objects;
+        if (object_match[i] >= 0) {
+          ++b->matched_objects;
+          const double error = std::abs(dets[object_match[i]]->range_m - range);
+          b->range_errors_m.push_back(error);
+          b->relative_errors.push_back(error / std::max(range, 1e-6));
+        }
+      }
+    }
+    for (size_t j = 0; j < dets.size(); ++j) {
+      const double range = det_match[j] >= 0 ? NearPoint(*objects[det_match[j]]).norm() : dets[j]->range_m;
+      for (BandScore* b : {&result.overall, band_of(range)}) {
+        if (!b) continue;
+        ++b->detections;
+        b->matched_detections += det_match[j] >= 0;
+      }
+      SourceScore* s = source_of(dets[j]->source);
+      ++s->detections;
+      s->matched += det_match[j] >= 0;
+    }
+  }
+  return result;
+}
+
+std::string EvaluationTable(const EvaluationResult& r) {
+  std::ostringstream out;
+  out << "band (m)  objects  recall  detections  precision  range error median / p90 (m)\n";
+  auto row = [&](const BandScore& b) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%-8s  %7d  %6s  %10d  %9s  %s / %s\n", b.name.c_str(), b.objects,
+                  b.objects ? Number(b.Recall()).c_str() : "-", b.detections,
+                  b.detections ? Number(b.Precision()).c_str() : "-", Number(b.MedianRangeError(), 2).c_str(),
+                  Number(b.RangeErrorP90(), 2).c_str());
+    out << buf;
+  };
+  for (const BandScore& b : r.bands) row(b);
+  row(r.overall);
+  out << "source    detections  matched  precision\n";
+  for (const SourceScore& s : r.sources) {
+    char buf[120];
+    std::snprintf(buf, sizeof(buf), "%-8s  %10d  %7d  %9s\n", s.source.c_str(), s.detections, s.matched,
+                  s.detections ? Number(s.Precision()).c_str() : "-");
+    out << buf;
+  }
+  out << "frames " << r.frames << ", with a detection in the zone " << r.frames_with_detections << "\n";
+  return out.str();
+}
+
+std::string EvaluationJson(const EvaluationResult& r) {
+  std::ostringstream out;
+  auto band = [&](const BandScore& b) {
+    out << "{\"band\": \"" << b.name << "\", \"objects\": " << b.objects << ", \"matched_objects\": "
+        << b.matched_objects << ", \"recall\": " << Number(b.Recall(), 4) << ", \"detections\": " << b.detections
+        << ", \"matched_detections\": " << b.matched_detections << ", \"precision\": " << Number(b.Precision(), 4)
+        << ", \"range_error_median_m\": " << Number(b.MedianRangeError(), 4)
+        << ", \"range_error_p90_m\": " << Number(b.RangeErrorP90(), 4)
+        << ", \"range_error_median_relative\": " << Number(b.MedianRelativeRangeError(), 4) << "}";
+  };
+  out << "{\n  \"overall\": ";
+  band(r.overall);
+  out << ",\n  \"bands\": [";
+  for (size_t i = 0; i < r.bands.size(); ++i) {
+    out << (i ? ", " : "");
+    band(r.bands[i]);
+  }
+  out << "],\n  \"sources\": [";
+  for (size_t i = 0; i < r.sources.size(); ++i) {
+    const SourceScore& s = r.sources[i];
+    out << (i ? ", " : "") << "{\"source\": \"" << s.source << "\", \"detections\": " << s.detections
+        << ", \"matched\": " << s.matched << ", \"precision\": " << Number(s.Precision(), 4) << "}";
+  }
+  out << "],\n  \"frames\": " << r.frames << ",\n  \"frames_with_detections\": " << r.frames_with_detections
+      << "\n}\n";
+  return out.str();
+}
+
+}  // namespace dps

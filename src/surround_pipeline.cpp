@@ -1,0 +1,88 @@
+#include "dps/surround_pipeline.h"
+
+#include <chrono>
+#include <algorithm>
+#include <cmath>
+
+#include "dps/error.h"
+
+namespace dps {
+
+PipelineOptions DefaultPipelineOptions(const Rig& rig) {
+  PipelineOptions o;
+  const double s = rig.Camera("left").model.width() / 640.0;
+  const int w = std::max(64, static_cast<int>(std::lround(400 * s))), h = std::max(32, static_cast<int>(std::lround(200 * s)));
+  const int d = std::max(16, static_cast<int>(std::lround(64 * s / 16.0)) * 16);
+  const int block = s >= 0.75 ? 9 : 7;
+  for (StereoOptions* st : {&o.front.stereo, &o.side.stereo}) {
+    st->num_disparities = d;
+    st->block_width = st->block_height = block;
+  }
+  o.side.stereo.min_disparity = -d / 4;
+  o.front.view_width = o.side.view_width = w;
+  o.front.view_height = o.side.view_height = h;
+  o.front.focal_px = o.side.focal_px = 170.0 * s;
+  return o;
+}
+
+Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
+  Coverage c;
+  const Eigen::Vector3d l = rig.Camera("left").vehicle_from_camera.t, r = rig.Camera("right").vehicle_from_camera.t;
+  const ViewSpec front = FrontViewSpec(rig, "left", "right", o.front.view_width, o.front.view_height, o.front.focal_px);
+  const Eigen::Vector3d dir = front.vehicle_from_view.col(2);
+  c.sectors.push_back({"front", {(l.x() + r.x()) / 2, (l.z() + r.z()) / 2}, std::atan2(dir.x(), dir.z()),
+                       std::atan(o.front.view_width / 2.0 / o.front.focal_px)});
+  if (o.sides) {
+    const double half = std::atan(o.side.view_width / 2.0 / o.side.focal_px);
+    const double pi = 3.14159265358979323846;
+    c.sectors.push_back({"left", {l.x(), l.z()}, -pi / 2, half});
+    c.sectors.push_back({"right", {r.x(), r.z()}, pi / 2, half});
+  }
+  return c;
+}
+
+SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& options)
+    : rig_(rig), options_(options), coverage_(PipelineCoverage(rig, options)) {
+  front_ = std::make_unique<FrontDetector>(rig, options.front);
+  if (options.sides) {
+    left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
+    right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
+  }
+}
+
+SurroundPipeline::~SurroundPipeline() = default;
+
+FrameOutput SurroundPipeline::Process(const FrameInput& in) {
+  FrameOutput out;
+  auto now = [] { return std::chrono::steady_clock::now(); };
+  auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+  const auto t0 = now();
+  out.front = front_->Detect(in.left, in.right);
+  const auto t1 = now();
+  out.front_ms = ms(t0, t1);
+  for (const Detection& d : out.front.detections) out.detections.push_back(d);
+  if (options_.sides) {
+    if (previous_left_.empty()) {
+      // The first frame has nothing to compare with.
+    } else if (!in.motion_known) {
+      out.warnings.push_back(Str("frame ", in.frame, ": no known motion (CAN); side detection skipped"));
+    } else {
+      out.left = left_->Detect(previous_left_, in.left, in.current_in_previous);
+      out.right = right_->Detect(previous_right_, in.right, in.current_in_previous);
+      for (const SideResult* s : {&out.left, &out.right}) {
+        if (s->skipped) continue;
+        for (const Detection& d : s->detections) out.detections.push_back(d);
+      }
+    }
+    previous_left_ = in.left.clone();
+    previous_right_ = in.right.clone();
+    out.sides_ms = ms(t1, now());
+  }
+  for (Detection& d : out.detections) {
+    d.frame = in.frame;
+    d.t_s = in.t_s;
+  }
+  return out;
+}
+
+}  // namespace dps
