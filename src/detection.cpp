@@ -1,6 +1,8 @@
 #include "dps/detection.h"
 
 #include <cmath>
+#include <functional>
+#include <map>
 #include <limits>
 
 #include "dps/atomic_file.h"
@@ -30,6 +32,56 @@ Detection DetectionFromPoints(const std::vector<Eigen::Vector2d>& points, const 
     }
   }
   return d;
+}
+
+std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double merge_distance_m) {
+  const size_t n = in.size();
+  std::vector<size_t> parent(n);
+  for (size_t i = 0; i < n; ++i) parent[i] = i;
+  std::function<size_t(size_t)> root = [&](size_t i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
+  auto points_of = [](const Detection& d) {
+    return d.points.empty() ? std::vector<Eigen::Vector2d>{{d.x_m, d.z_m}} : d.points;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      if (in[i].frame != in[j].frame) continue;
+      bool close = false;
+      for (const Eigen::Vector2d& a : points_of(in[i])) {
+        for (const Eigen::Vector2d& b : points_of(in[j])) {
+          if ((a - b).norm() <= merge_distance_m) {
+            close = true;
+            break;
+          }
+        }
+        if (close) break;
+      }
+      if (close) parent[root(i)] = root(j);
+    }
+  }
+  std::vector<Detection> out;
+  std::vector<int> slot(n, -1);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t r = root(i);
+    if (slot[r] < 0) {
+      slot[r] = static_cast<int>(out.size());
+      out.push_back(in[i]);
+      out.back().points = points_of(in[i]);
+      continue;
+    }
+    Detection& m = out[slot[r]];
+    const std::vector<Eigen::Vector2d> extra = points_of(in[i]);
+    std::vector<Eigen::Vector2d> points = m.points;
+    points.insert(points.end(), extra.begin(), extra.end());
+    const std::string source = in[i].range_m < m.range_m ? in[i].source : m.source;
+    const int frame = m.frame;
+    const double t = m.t_s;
+    m = DetectionFromPoints(points, source);
+    m.frame = frame;
+    m.t_s = t;
+  }
+  std::map<std::pair<int, std::string>, int> next_id;
+  for (Detection& d : out) d.id = next_id[{d.frame, d.source}]++;
+  return out;
 }
 
 void WriteDetections(const std::vector<Detection>& detections, const std::string& path) {

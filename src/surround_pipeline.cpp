@@ -82,6 +82,7 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in) {
     d.frame = in.frame;
     d.t_s = in.t_s;
   }
+  out.detections = FuseDetections(out.detections, options_.merge_distance_m);
   return out;
 }
 

@@ -26,6 +26,12 @@ struct Detection {
 // A detection summarising ground points (at least one): nearest point, extent, count.
 Detection DetectionFromPoints(const std::vector<Eigen::Vector2d>& points, const std::string& source);
 
+// Merges the detections of one frame whose ground points come within merge_distance_m of each
+// other (the parts of one object: a car's back and side, or one car seen by the front pair and a
+// side camera at once), so that each object is one entry of the map. The merged detection keeps
+// the source of the part holding the nearest point; ids are renumbered per source.
+std::vector<Detection> FuseDetections(const std::vector<Detection>& detections, double merge_distance_m);
+
 // detections.csv: header and one row per detection, written atomically. Throws dps::Error.
 void WriteDetections(const std::vector<Detection>& detections, const std::string& path);
 // Reads detections.csv (columns by name, extra columns ignored). Throws dps::Error naming the
