@@ -1,0 +1,166 @@
+// Tests of drive reading and processing: CAN logs (our format, a real comma2k19 log with its own
+// columns and a separate gyro log, bad logs), frame sources, and dps-process's per-drive outputs.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "check.h"
+#include "dps/csv.h"
+#include "dps/drive_io.h"
+#include "dps/drive_processing.h"
+#include "dps/error.h"
+#include "dps/scene_io.h"
+#include "dps/synth.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kReal = DPS_REAL_DATA_DIR;
+const std::string kSource = DPS_SOURCE_DIR;
+const fs::path kTmp = fs::temp_directory_path() / "dps_test_drive_io";
+
+constexpr double kInsPathM = 1011.8;       // data/real/README.md
+constexpr double kPathTolFraction = 0.015; // wheel-speed scale vs INS
+constexpr double kDisplacementTolFraction = 0.03;
+
+std::string Write(const std::string& name, const std::string& text) {
+  const fs::path p = kTmp / name;
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+void TestCanLogs() {
+  const dps::CanLog log = dps::ReadCanLog(
+      Write("can.csv", "t,speed,yaw_rate,extra\n0,10,0,x\n0.4,10,0,x\n0.8,10,0.1,y\n1.2,10,0.1,y\n1.6,12,0.1,z\n2,12,0.1,z\n"));
+  CHECK_NEAR(log.t_begin, 0, 0);
+  CHECK_NEAR(log.t_end, 2, 0);
+  dps::PlanarPose p;
+  std::string why;
+  CHECK(dps::MotionBetween(log, 0.0, 0.5, &p, &why));
+  CHECK_NEAR(p.z_m, 5.0, 1e-6);  // 10 m/s for 0.5 s, nearly straight
+  CHECK(dps::MotionBetween(log, 1.0, 1.5, &p, &why));
+  CHECK_NEAR(p.heading_rad, -0.05, 1e-9);  // 0.1 rad/s to the left for 0.5 s
+  CHECK(!dps::MotionBetween(log, 1.5, 2.5, &p, &why));
+  CHECK(why.find("outside the CAN log") != std::string::npos);
+  // Units and names of another log: km/h and deg/s.
+  dps::CanLogFormat f;
+  f.time_column = "time";
+  f.speed_column = "v_kmh";
+  f.speed_scale = 1 / 3.6;
+  f.yaw_rate_column = "yaw_dps";
+  f.yaw_rate_scale = M_PI / 180;
+  const dps::CanLog kmh = dps::ReadCanLog(Write("kmh.csv", "time,v_kmh,yaw_dps\n0,36,0\n1,36,0\n"), f);
+  CHECK_NEAR(kmh.profile.At(0.5).speed_mps, 10.0, 1e-12);
+  // NaN rows and duplicate times are dropped with a warning; a gap makes motion unknown.
+  const dps::CanLog gappy = dps::ReadCanLog(Write("gappy.csv", "t,speed\n0,5\n0.1,nan\n0.1,5\n0.1,6\n2,5\n2.1,5\n"));
+  CHECK_EQ(gappy.warnings.size(), size_t{2});
+  CHECK_EQ(gappy.gaps.size(), size_t{1});
+  CHECK(!dps::MotionBetween(gappy, 1.0, 1.1, &p, &why));
+  CHECK(why.find("gap") != std::string::npos);
+  CHECK(dps::MotionBetween(gappy, 2.0, 2.1, &p, &why));
+  // Bad logs.
+  CHECK_THROWS_WITH(dps::ReadCanLog(Write("back.csv", "t,speed\n0,1\n2,1\n1,1\n")), dps::Error, "back.csv:4: time 1 goes backwards");
+  CHECK_THROWS_WITH(dps::ReadCanLog(Write("nospeed.csv", "t,v\n0,1\n1,1\n")), dps::Error, "missing column 'speed'");
+  CHECK_THROWS_WITH(dps::ReadCanLog(Write("short.csv", "t,speed\n0,1\n")), dps::Error, "fewer than 2");
+}
+
+// The real comma2k19 minute: speed from can_speed.csv, yaw rate from the IMU's gyro. The ego
+// motion integrated from them must have the INS path's length and end-to-end displacement.
+void TestComma2k19() {
+  const std::string dir = kReal + "/can_logs/comma2k19/";
+  dps::CanLogFormat f;
+  f.time_column = "t_boot_s";
+  f.speed_column = "car_speed_mps";
+  f.yaw_rate_file = dir + "imu_gyro.csv";
+  f.yaw_rate_time_column = "t_boot_s";
+  f.yaw_rate_column = "gz";
+  const dps::CanLog log = dps::ReadCanLog(dir + "can_speed.csv", f);
+  // The INS positions (ECEF) over the same span.
+  const dps::CsvTable ins = dps::CsvTable::Read(dir + "frame_poses.csv");
+  const int t = ins.Column("t_boot_s"), x = ins.Column("ecef_x"), y = ins.Column("ecef_y"), z = ins.Column("ecef_z");
+  std::vector<Eigen::Vector3d> pos;
+  std::vector<double> times;
+  for (size_t r = 0; r < ins.rows(); ++r) {
+    const double tr = ins.Number(r, t);
+    if (tr < log.t_begin || tr > log.t_end) continue;
+    times.push_back(tr);
+    pos.push_back({ins.Number(r, x), ins.Number(r, y), ins.Number(r, z)});
+  }
+  CHECK(times.size() > 1000);
+  double ins_length = 0;
+  for (size_t i = 1; i < pos.size(); ++i) ins_length += (pos[i] - pos[i - 1]).norm();
+  // Integrate over the INS samples' times, summing the chords like the INS path.
+  double length = 0;
+  dps::PlanarPose pose;
+  for (size_t i = 1; i < times.size(); ++i) {
+    dps::PlanarPose step;
+    std::string why;
+    CHECK(dps::MotionBetween(log, times[i - 1], times[i], &step, &why));
+    length += std::hypot(step.x_m, step.z_m);
+    // Compose: step is in the vehicle frame at times[i - 1].
+    const double c = std::cos(pose.heading_rad), s = std::sin(pose.heading_rad);
+    pose.x_m += c * step.x_m + s * step.z_m;
+    pose.z_m += -s * step.x_m + c * step.z_m;
+    pose.heading_rad += step.heading_rad;
+  }
+  const double displacement = std::hypot(pose.x_m, pose.z_m);
+  const double ins_displacement = (pos.back() - pos.front()).norm();
+  std::printf("comma2k19: %.1f s; path %.1f m (INS %.1f m over the same span, %.1f m in all); displacement %.1f m "
+              "(INS %.1f m); heading change %.1f deg\n",
+              times.back() - times.front(), length, ins_length, kInsPathM, displacement, ins_displacement,
+              pose.heading_rad * 180 / M_PI);
+  CHECK_NEAR(length / ins_length, 1.0, kPathTolFraction);
+  CHECK_NEAR(ins_length, kInsPathM, 15.0);
+  CHECK_NEAR(displacement / ins_displacement, 1.0, kDisplacementTolFraction);
+}
+
+void TestProcessDrive() {
+  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/lead_car.yaml");
+  dps::ResizeScene(&scene, 320, 240);
+  scene.render.supersample = 1;
+  dps::SynthOptions so;
+  so.frames = 6;
+  so.overwrite = true;
+  dps::Synthesize(scene, (kTmp / "drives" / "lead").string(), so);
+  dps::DriveOptions o;
+  o.map_png = true;
+  int calls = 0;
+  const dps::DriveSummary s =
+      dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out").string(), o, [&](int, int) { ++calls; });
+  CHECK_EQ(s.frames, 6);
+  CHECK_EQ(calls, 6);
+  CHECK(dps::DriveOutputComplete((kTmp / "out" / "lead").string()));
+  for (const char* f : {"detections.csv", "summary.json", "map/000005.png"}) CHECK(fs::exists(kTmp / "out" / "lead" / f));
+  CHECK(fs::exists(kTmp / "out" / "lead" / "map.avi") || !s.warnings.empty());
+  const std::vector<dps::Detection> d = dps::ReadDetections((kTmp / "out" / "lead" / "detections.csv").string());
+  CHECK_EQ(static_cast<int>(d.size()), s.detections);
+  for (const auto& e : fs::directory_iterator(kTmp / "out")) {
+    CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
+  }
+  // Left and right of different lengths: an error naming both, no output left behind.
+  fs::remove(kTmp / "drives" / "lead" / "right" / "000005.png");
+  CHECK_THROWS_WITH(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out2").string(), o), dps::Error,
+                    "has 6 frames");
+  CHECK(!fs::exists(kTmp / "out2" / "lead"));
+  o.truncate = true;
+  CHECK_EQ(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out2").string(), o).frames, 5);
+  // A drive without can.csv.
+  fs::remove(kTmp / "drives" / "lead" / "can.csv");
+  CHECK_THROWS_WITH(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out3").string(), o), dps::Error,
+                    "can.csv");
+  CHECK_THROWS_WITH(dps::FrameSource::Open((kTmp / "drives").string(), "left"), dps::Error, "no 'left/'");
+}
+
+}  // namespace
+
+int main() {
+  fs::remove_all(kTmp);
+  fs::create_directories(kTmp);
+  TestCanLogs();
+  TestComma2k19();
+  TestProcessDrive();
+  fs::remove_all(kTmp);
+  return dps_test::Report();
+}
