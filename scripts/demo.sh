@@ -1,18 +1,23 @@
 #!/usr/bin/env bash
 # The main job on a built-in default: installs what is missing, builds (Release), synthesises a
-# drive (a lead car approaching and receding, two omni cameras) and a calibration scene into out/,
-# and says what is where.
+# drive (two omni cameras, a lead car approaching and receding), processes it into the surround
+# map and detections, scores them against the drive's ground truth, and says what is where.
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD_DIR=${DPS_BUILD_DIR:-$ROOT/build}
 OUT=${DPS_DEMO_OUT:-$ROOT/out}
+SCENE=${1:-lead_car}
 "$ROOT/scripts/build.sh"
+T="$BUILD_DIR/tools"
 mkdir -p "$OUT"
-"$BUILD_DIR/tools/dps-synth" "$ROOT/data/scenes/lead_car.yaml" --out "$OUT/lead_car" --video --force
-"$BUILD_DIR/tools/dps-synth" "$ROOT/data/scenes/calibration.yaml" --out "$OUT/calibration" --force
+"$T/dps-synth" "$ROOT/data/scenes/$SCENE.yaml" --out "$OUT/drives/$SCENE" --force
+"$T/dps-process" "$OUT/drives/$SCENE" --out "$OUT/results" --force --map-png
+"$T/dps-eval" --detections "$OUT/results/$SCENE/detections.csv" --truth "$OUT/drives/$SCENE/truth.csv" \
+  --rig "$OUT/drives/$SCENE/rig.yaml" --json "$OUT/results/$SCENE/scores.json" | tee "$OUT/results/$SCENE/scores.txt"
 echo
-echo "Synthetic drive:     $OUT/lead_car  (left/, right/ PNGs, left.avi, right.avi, can.csv, truth.csv)"
-echo "Calibration scene:   $OUT/calibration  (marks.csv, rig.yaml nominal, rig_true.yaml)"
-echo "First truth rows:"
-head -n 4 "$OUT/lead_car/truth.csv" | column -t -s, 2>/dev/null || head -n 4 "$OUT/lead_car/truth.csv"
-echo "Look at: $OUT/lead_car/left/000045.png (the lead car is nearest at frame 45)"
+echo "Drive (synthetic, with truth):  $OUT/drives/$SCENE/"
+echo "Surround map video:             $OUT/results/$SCENE/map.avi   (frames: $OUT/results/$SCENE/map/)"
+echo "Detections:                     $OUT/results/$SCENE/detections.csv"
+head -n 4 "$OUT/results/$SCENE/detections.csv" | column -t -s, 2>/dev/null || head -n 4 "$OUT/results/$SCENE/detections.csv"
+echo "Scores (DESIGN.md §5):          $OUT/results/$SCENE/scores.txt, scores.json"
+echo "Other scenes: $0 overtaking | parked_cars | left_turn | truck_far | empty_road"
