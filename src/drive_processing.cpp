@@ -42,7 +42,7 @@ std::string DriveSummary::ToJson() const {
   o.precision(6);
   o << "{\n  \"drive\": " << JsonString(drive) << ",\n  \"frames\": " << frames
     << ",\n  \"frames_without_motion\": " << frames_without_motion << ",\n  \"detections\": " << detections
-    << ",\n  \"seconds\": " << seconds << ",\n  \"frames_per_second\": " << frames_per_second
+    << ",\n  \"front_vertical_offset_px\": " << front_vertical_offset_px << ",\n  \"seconds\": " << seconds << ",\n  \"frames_per_second\": " << frames_per_second
     << ",\n  \"stage_seconds\": {";
   bool first = true;
   for (const auto& [k, v] : stage_seconds) {
@@ -149,6 +149,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
         }
       }
       FrameOutput out = pipeline.Process(in);
+      s.front_vertical_offset_px = out.front.vertical_offset_px;
       front += out.front_ms / 1000.0;
       sides += out.sides_ms / 1000.0;
       auto t2 = Clock::now();

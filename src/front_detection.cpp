@@ -25,12 +25,16 @@ StereoOptions DetectionStereoOptions() {
   return o;
 }
 
-FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options) : options_(options) {
+FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options) : options_(options), rig_(rig) {
   options_.histogram.min_disparity = options.stereo.min_disparity;
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = false;
   options_.histogram.Check();
   const ViewSpec spec = FrontViewSpec(rig, "left", "right", options.view_width, options.view_height, options.focal_px);
+  spec_ = spec;
+  if (options.temporal_max_variance_px2 > 0) {
+    temporal_ = std::make_unique<TemporalConsistencyFilter>(options.temporal_forgetting, options.temporal_max_variance_px2);
+  }
   left_ = std::make_unique<VirtualView>(rig.Camera("left"), spec);
   right_ = std::make_unique<VirtualView>(rig.Camera("right"), spec);
   matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
@@ -75,8 +79,24 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
   FrontResult r;
   left_->Render(Grey(left_omni), r.left_view);
   right_->Render(Grey(right_omni), r.right_view);
+  // Drift: measure the rows' misalignment now and then, and rebuild the right view to cancel it.
+  if (options_.drift_interval > 0 && frames_ % options_.drift_interval == 0) {
+    const VerticalOffset off = EstimateVerticalOffset(r.left_view, r.right_view, options_.stereo.min_disparity,
+                                                      options_.stereo.num_disparities);
+    r.drift_measured = true;
+    if (off.features >= options_.drift_min_features && std::abs(off.offset_px) > options_.drift_min_px) {
+      vertical_offset_px_ += off.offset_px;
+      ViewSpec shifted = spec_;
+      shifted.cy -= vertical_offset_px_;
+      right_ = std::make_unique<VirtualView>(rig_.Camera("right"), shifted);
+      right_->Render(Grey(right_omni), r.right_view);
+    }
+  }
+  r.vertical_offset_px = vertical_offset_px_;
+  ++frames_;
   r.disparity = matcher_->Compute(r.left_view, r.right_view);
   r.disparity.setTo(kInvalidDisparity, ignore_);
+  if (temporal_) r.disparity = temporal_->Apply(r.disparity);
   r.score = ScoreImage(r.disparity, road_, options_.histogram, ramp_);
   cv::Mat moments, labels;
   r.histogram = ColumnHistogram(r.disparity, r.score, options_.histogram, &moments);

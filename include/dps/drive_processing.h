@@ -30,6 +30,7 @@ struct DriveSummary {
   int frames = 0;
   int frames_without_motion = 0;  // side detection skipped for them
   int detections = 0;
+  double front_vertical_offset_px = 0.0;  // drift correction of the front pair at the end
   std::vector<std::string> warnings;
   std::map<std::string, double> stage_seconds;  // decode, front, sides, map, write
   double seconds = 0.0;

@@ -39,6 +39,16 @@ struct FrontDetectorOptions {
   // Components whose pixels reach less than this above the road (median over columns) are flat
   // (markings, mismatched road) and dropped; metres, >= 0.
   double min_obstacle_height_m = 0.5;
+  // Drift correction: every `drift_interval` frames (0 = never) the rows of the two views are
+  // compared (EstimateVerticalOffset); a shift of more than drift_min_px measured on at least
+  // drift_min_features corners is compensated by rebuilding the right view.
+  int drift_interval = 30;
+  double drift_min_px = 0.25;
+  int drift_min_features = 10;
+  // Temporal consistency (the paper's variance check): pixels whose disparity varies over frames
+  // by more than this variance are suppressed; 0 = off.
+  double temporal_max_variance_px2 = 4.0;
+  double temporal_forgetting = 0.5;
 };
 
 // Everything one frame's front detection produced, for the map and the diagnostics.
@@ -49,6 +59,8 @@ struct FrontResult {
   cv::Mat histogram;              // eq. 15
   cv::Mat obstacle;               // CV_32F histogram-sized image of centroid disparities, 0 = none
   std::vector<Detection> detections;  // one per component (frame and t left 0)
+  double vertical_offset_px = 0.0;    // the right view's compensated row shift so far
+  bool drift_measured = false;        // the offset was measured on this frame
 };
 
 class FrontDetector {
@@ -57,7 +69,8 @@ class FrontDetector {
   FrontDetector(const Rig& rig, const FrontDetectorOptions& options);
   ~FrontDetector();
 
-  // Detects obstacles in one pair of omni images (grey or BGR, the cameras' sizes).
+  // Detects obstacles in one pair of omni images (grey or BGR, the cameras' sizes). Frames must
+  // come in order: drift correction and the temporal filter keep state between them.
   FrontResult Detect(const cv::Mat& left_omni, const cv::Mat& right_omni);
 
   // The ground point (vehicle frame x, z) of view column x at disparity d (eq. 16); false when d
@@ -72,6 +85,11 @@ class FrontDetector {
  private:
   FrontDetectorOptions options_;
   std::unique_ptr<VirtualView> left_, right_;
+  Rig rig_;
+  ViewSpec spec_;
+  double vertical_offset_px_ = 0.0;
+  int frames_ = 0;
+  std::unique_ptr<TemporalConsistencyFilter> temporal_;
   std::unique_ptr<SadStereoMatcher> matcher_;
   double baseline_m_ = 0.0;
   cv::Mat road_, ramp_;
