@@ -7,17 +7,6 @@
 #include "dps/error.h"
 
 namespace dps {
-namespace {
-
-cv::Mat Grey(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat grey;
-  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  return grey;
-}
-
-}  // namespace
-
 StereoOptions DetectionStereoOptions() {
   StereoOptions o;
   o.num_disparities = 64;
@@ -77,8 +66,8 @@ bool FrontDetector::ColumnToGround(double x, double disparity, Eigen::Vector2d* 
 
 FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right_omni) {
   FrontResult r;
-  left_->Render(Grey(left_omni), r.left_view);
-  right_->Render(Grey(right_omni), r.right_view);
+  left_->Render(GreyImage(left_omni), r.left_view);
+  right_->Render(GreyImage(right_omni), r.right_view);
   // Drift: measure the rows' misalignment now and then, and rebuild the right view to cancel it.
   if (options_.drift_interval > 0 && frames_ % options_.drift_interval == 0) {
     const VerticalOffset off = EstimateVerticalOffset(r.left_view, r.right_view, options_.stereo.min_disparity,
@@ -89,7 +78,7 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
       ViewSpec shifted = spec_;
       shifted.cy -= vertical_offset_px_;
       right_ = std::make_unique<VirtualView>(rig_.Camera("right"), shifted);
-      right_->Render(Grey(right_omni), r.right_view);
+      right_->Render(GreyImage(right_omni), r.right_view);
     }
   }
   r.vertical_offset_px = vertical_offset_px_;

@@ -10,13 +10,6 @@
 namespace dps {
 namespace {
 
-cv::Mat Grey(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat grey;
-  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  return grey;
-}
-
 // Where a view pixel's ray meets the road, in the vehicle frame of the view; false above the
 // horizon.
 bool PixelToGround(const VirtualView& view, double x, double y, Eigen::Vector3d* ground) {
@@ -67,9 +60,9 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   const double alpha = std::atan2(delta.x(), delta.z());
   const double sign = side_ == Side::kLeft ? 1.0 : -1.0;
   const VirtualView& previous_view = views_->Get(sign * alpha);
-  const cv::Mat previous = previous_view.Render(Grey(previous_omni));
+  const cv::Mat previous = previous_view.Render(GreyImage(previous_omni));
   const VirtualView& current_view = views_->Get(sign * (alpha - current_in_previous.heading_rad));
-  const cv::Mat current = current_view.Render(Grey(current_omni));
+  const cv::Mat current = current_view.Render(GreyImage(current_omni));
   // The camera moves along +x of a left view (static things move left in the image: the earlier
   // image is the reference) and along -x of a right view (the later one is).
   const bool previous_is_reference = side_ == Side::kLeft;

@@ -20,17 +20,11 @@ void ViewSpec::Check() const {
   if (!problem.empty()) throw Error("view: vehicle_from_view: " + problem);
 }
 
-ViewSpec FrontViewSpec(const Rig& rig, const std::string& left_camera,
-                       const std::string& right_camera, int width, int height, double focal_px) {
-  const Eigen::Vector3d baseline =
-      rig.Camera(right_camera).vehicle_from_camera.t - rig.Camera(left_camera).vehicle_from_camera.t;
-  if (baseline.norm() < 1e-3) throw Error(Str("front view: cameras '", left_camera, "' and '",
-                                              right_camera, "' are at the same place"));
-  const Eigen::Vector3d x = baseline.normalized();
-  Eigen::Vector3d z = Eigen::Vector3d::UnitZ() - x.z() * x;
-  if (z.norm() < 1e-3) throw Error("front view: the baseline points forward; no front pair");
-  z.normalize();
-  const Eigen::Vector3d y = z.cross(x);
+namespace {
+
+// A view with its principal point at the image centre and axes x, y, z (vehicle frame).
+ViewSpec CentredSpec(int width, int height, double focal_px, const Eigen::Vector3d& x,
+                     const Eigen::Vector3d& y, const Eigen::Vector3d& z) {
   ViewSpec s;
   s.width = width;
   s.height = height;
@@ -41,19 +35,33 @@ ViewSpec FrontViewSpec(const Rig& rig, const std::string& left_camera,
   return s;
 }
 
+}  // namespace
+
+cv::Mat GreyImage(const cv::Mat& image) {
+  if (image.channels() == 1) return image;
+  cv::Mat grey;
+  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  return grey;
+}
+
+ViewSpec FrontViewSpec(const Rig& rig, const std::string& left_camera,
+                       const std::string& right_camera, int width, int height, double focal_px) {
+  const Eigen::Vector3d baseline =
+      rig.Camera(right_camera).vehicle_from_camera.t - rig.Camera(left_camera).vehicle_from_camera.t;
+  if (baseline.norm() < 1e-3) throw Error(Str("front view: cameras '", left_camera, "' and '",
+                                              right_camera, "' are at the same place"));
+  const Eigen::Vector3d x = baseline.normalized();
+  Eigen::Vector3d z = Eigen::Vector3d::UnitZ() - x.z() * x;
+  if (z.norm() < 1e-3) throw Error("front view: the baseline points forward; no front pair");
+  z.normalize();
+  return CentredSpec(width, height, focal_px, x, z.cross(x), z);
+}
+
 ViewSpec SideViewSpec(Side side, int width, int height, double focal_px, double yaw_rad) {
   const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
   const Eigen::Vector3d z = side == Side::kLeft ? Eigen::Vector3d(-c, 0, s) : Eigen::Vector3d(c, 0, s);
   const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d x = y.cross(z);
-  ViewSpec v;
-  v.width = width;
-  v.height = height;
-  v.focal_px = focal_px;
-  v.cx = (width - 1) / 2.0;
-  v.cy = (height - 1) / 2.0;
-  v.vehicle_from_view << x, y, z;
-  return v;
+  return CentredSpec(width, height, focal_px, y.cross(z), y, z);
 }
 
 VirtualView::VirtualView(const RigCamera& camera, const ViewSpec& spec)
