@@ -70,7 +70,7 @@ endif()
 # One bad drive among good ones: reported, the others finish, exit status = failures.
 file(MAKE_DIRECTORY "${WORK}/drives/broken")
 expect(nonzero "broken/rig.yaml: file not found" "${TOOLS}/dps-process" "${WORK}/drives/broken" "${WORK}/drives/lead"
-       --out "${WORK}/results2" --quiet)
+       --out "${WORK}/results2" --quiet --jobs 2)
 if(NOT EXISTS "${WORK}/results2/lead/summary.json")
   message(FATAL_ERROR "the good drive did not finish next to the broken one")
 endif()

@@ -1,10 +1,13 @@
 // dps-process: recorded drives -> detections.csv, surround-map video, summary.json.
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <mutex>
+#include <thread>
 
 #include "cli.h"
 #include "dps/drive_processing.h"
@@ -22,6 +25,7 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --out DIR             output root
   --list FILE           more drives, one folder per line
   --shard I/N           process every N-th drive starting at I (0-based), for job arrays
+  --jobs N              process N drives at once (default 1)
   --force               redo drives whose outputs are complete
   --map-png             also write map/NNNNNN.png
   --no-video            no map.avi
@@ -42,7 +46,7 @@ One bad drive is reported and the others still run; the exit status is the numbe
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-process", [&] {
     const dps_cli::Args args(argc, argv,
-                             {"out", "list", "shard", "image-fps", "speed-column", "speed-scale", "yaw-column",
+                             {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
                               "yaw-scale", "time-column", "yaw-file"},
                              {"force", "map-png", "no-video", "truncate", "quiet"});
     if (args.help()) {
@@ -78,50 +82,66 @@ int main(int argc, char** argv) {
     options.can.yaw_rate_file = args.Get("yaw-file");
     options.can.yaw_rate_time_column = options.can.time_column;
     const bool quiet = args.Has("quiet"), tty = isatty(STDERR_FILENO);
-    int failed = 0, done = 0, skipped = 0;
+    const int jobs = args.Integer("jobs", 1);
+    if (jobs < 1) throw dps::Error("option --jobs: expected >= 1");
     std::vector<std::string> mine;
     for (size_t i = 0; i < drives.size(); ++i) {
       if (static_cast<int>(i % shards) == shard) mine.push_back(drives[i]);
     }
-    for (size_t i = 0; i < mine.size(); ++i) {
-      const std::string& drive = mine[i];
-      const std::string out_dir = dps::DriveOutputDir(drive, args.Get("out"));
-      if (!args.Has("force") && dps::DriveOutputComplete(out_dir)) {
-        ++skipped;
-        if (!quiet) std::cerr << "dps-process: " << out_dir << " is complete; skipped (--force redoes it)\n";
-        continue;
-      }
-      const auto start = std::chrono::steady_clock::now();
-      auto progress = [&](int f, int total) {
-        if (quiet) return;
-        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        const double fps = f / std::max(s, 1e-9);
-        if (tty) {
-          std::fprintf(stderr, "\rdps-process: drive %zu/%zu %s  frame %d/%d  %.1f frames/s  ETA %.0f s   ", i + 1,
-                       mine.size(), drive.c_str(), f, total, fps, (total - f) / std::max(fps, 1e-9));
-          if (f == total) std::fprintf(stderr, "\n");
-        } else if (f == total || f % 25 == 0) {
-          std::fprintf(stderr, "dps-process: drive %zu/%zu %s frame %d/%d (%.1f frames/s)\n", i + 1, mine.size(),
-                       drive.c_str(), f, total, fps);
+    std::atomic<int> failed{0}, done{0}, skipped{0};
+    std::atomic<size_t> next{0};
+    std::mutex print;
+    auto worker = [&] {
+      for (size_t i = next++; i < mine.size(); i = next++) {
+        const std::string& drive = mine[i];
+        const std::string out_dir = dps::DriveOutputDir(drive, args.Get("out"));
+        if (!args.Has("force") && dps::DriveOutputComplete(out_dir)) {
+          ++skipped;
+          std::lock_guard<std::mutex> lock(print);
+          if (!quiet) std::cerr << "dps-process: " << out_dir << " is complete; skipped (--force redoes it)\n";
+          continue;
         }
-      };
-      try {
-        const dps::DriveSummary s = dps::ProcessDrive(drive, args.Get("out"), options, progress);
-        ++done;
-        if (!quiet) {
-          std::cerr << "dps-process: " << s.output_dir << ": " << s.frames << " frames, " << s.detections
-                    << " detections, " << s.frames_per_second << " frames/s";
-          if (!s.warnings.empty()) std::cerr << ", " << s.warnings.size() << " warning(s) in summary.json";
-          std::cerr << "\n";
+        const auto start = std::chrono::steady_clock::now();
+        // A live line on a terminal when one drive runs at a time; plain lines otherwise.
+        const bool live = tty && jobs == 1;
+        auto progress = [&](int f, int total) {
+          if (quiet) return;
+          const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+          const double fps = f / std::max(s, 1e-9);
+          std::lock_guard<std::mutex> lock(print);
+          if (live) {
+            std::fprintf(stderr, "\rdps-process: drive %zu/%zu %s  frame %d/%d  %.1f frames/s  ETA %.0f s   ", i + 1,
+                         mine.size(), drive.c_str(), f, total, fps, (total - f) / std::max(fps, 1e-9));
+            if (f == total) std::fprintf(stderr, "\n");
+          } else if (f == total || f % 25 == 0) {
+            std::fprintf(stderr, "dps-process: drive %zu/%zu %s frame %d/%d (%.1f frames/s)\n", i + 1, mine.size(),
+                         drive.c_str(), f, total, fps);
+          }
+        };
+        try {
+          const dps::DriveSummary s = dps::ProcessDrive(drive, args.Get("out"), options, progress);
+          ++done;
+          std::lock_guard<std::mutex> lock(print);
+          if (!quiet) {
+            std::cerr << "dps-process: " << s.output_dir << ": " << s.frames << " frames, " << s.detections
+                      << " detections, " << s.frames_per_second << " frames/s";
+            if (!s.warnings.empty()) std::cerr << ", " << s.warnings.size() << " warning(s) in summary.json";
+            std::cerr << "\n";
+          }
+        } catch (const std::exception& e) {
+          ++failed;
+          std::lock_guard<std::mutex> lock(print);
+          std::cerr << "dps-process: error: " << e.what() << std::endl;
         }
-      } catch (const std::exception& e) {
-        ++failed;
-        std::cerr << "dps-process: error: " << e.what() << std::endl;
       }
-    }
+    };
+    std::vector<std::thread> threads;
+    for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
+    worker();
+    for (std::thread& t : threads) t.join();
     if (!quiet) {
       std::cerr << "dps-process: " << done << " processed, " << skipped << " skipped, " << failed << " failed\n";
     }
-    return std::min(failed, 125);
+    return std::min(failed.load(), 125);
   });
 }
