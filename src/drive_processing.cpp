@@ -118,6 +118,8 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       }
     }
     const bool png = o.map_png || (o.map_video && !video.isOpened());
+    cv::VideoWriter diagnostics;
+    const std::string diagnostics_tmp = (tmp / ".diagnostics.tmp.avi").string();
     if (png) fs::create_directories(tmp / "map");
     double decode = 0, front = 0, sides = 0, map_s = 0, write = 0;
     cv::Mat l, r;
@@ -160,6 +162,27 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       auto t3 = Clock::now();
       map_s += Seconds(t2, t3);
       if (video.isOpened()) video.write(map);
+      if (o.diagnostics) {
+        const PipelineOptions& po = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
+        const cv::Size panel(po.front.view_width, po.front.view_height);
+        const double fd0 = po.front.stereo.min_disparity, fd1 = fd0 + po.front.stereo.num_disparities;
+        const double sd0 = po.side.stereo.min_disparity, sd1 = sd0 + po.side.stereo.num_disparities;
+        cv::Mat all;
+        cv::hconcat(std::vector<cv::Mat>{
+                        DrawDiagnostics("front", out.front.left_view, out.front.right_view, out.front.disparity,
+                                        out.front.histogram, out.front.obstacle, fd0, fd1, panel),
+                        DrawDiagnostics("left", out.left.reference_view, out.left.other_view, out.left.disparity,
+                                        out.left.histogram, out.left.obstacle, sd0, sd1, panel),
+                        DrawDiagnostics("right", out.right.reference_view, out.right.other_view, out.right.disparity,
+                                        out.right.histogram, out.right.obstacle, sd0, sd1, panel)},
+                    all);
+        if (!diagnostics.isOpened()) {
+          diagnostics.open(diagnostics_tmp, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, all.size());
+          if (!diagnostics.isOpened()) throw Error(Str(s.output_dir, ": cannot open a video writer for diagnostics"));
+        }
+        diagnostics.write(all);
+        if (f == frames / 2) cv::imwrite((tmp / "diagnostics_middle.png").string(), all);
+      }
       if (png) {
         char name[32];
         std::snprintf(name, sizeof(name), "%06d.png", f);
@@ -173,6 +196,10 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     if (video.isOpened()) {
       video.release();
       RenameReplacing(video_tmp, (tmp / "map.avi").string());
+    }
+    if (diagnostics.isOpened()) {
+      diagnostics.release();
+      RenameReplacing(diagnostics_tmp, (tmp / "diagnostics.avi").string());
     }
     WriteDetections(detections, (tmp / "detections.csv").string());
     write += Seconds(t4, Clock::now());

@@ -1,6 +1,7 @@
 #include "dps/surround_map.h"
 
 #include <cmath>
+#include <limits>
 
 #include <opencv2/imgproc.hpp>
 
@@ -56,6 +57,68 @@ cv::Mat DrawSurroundMap(const std::vector<Detection>& detections, const Vehicle&
   cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return map;
+}
+
+namespace {
+
+cv::Mat Panel(const cv::Mat& image, cv::Size size, const std::string& label) {
+  cv::Mat out(size, CV_8UC3, cv::Scalar(60, 60, 60));
+  if (!image.empty()) {
+    cv::Mat bgr = image;
+    if (image.channels() == 1) cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+    cv::resize(bgr, out, size, 0, 0, cv::INTER_NEAREST);
+  }
+  cv::putText(out, label, cv::Point(6, 16), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 255, 255), 1, cv::LINE_AA);
+  return out;
+}
+
+}  // namespace
+
+cv::Mat DrawDiagnostics(const std::string& title, const cv::Mat& reference, const cv::Mat& other,
+                        const cv::Mat& disparity, const cv::Mat& histogram, const cv::Mat& obstacle,
+                        double min_d, double max_d, cv::Size panel) {
+  cv::Mat composite, disp_colour, hist_colour, obst_colour;
+  if (!reference.empty() && !other.empty()) {
+    std::vector<cv::Mat> ch = {other, other, reference};  // B, G from the right / later view, R from the left
+    cv::merge(ch, composite);
+  }
+  if (!disparity.empty()) {
+    cv::Mat scaled(disparity.size(), CV_8U);
+    for (int y = 0; y < disparity.rows; ++y) {
+      for (int x = 0; x < disparity.cols; ++x) {
+        const float d = disparity.at<float>(y, x);
+        scaled.at<std::uint8_t>(y, x) = std::isfinite(d) ? cv::saturate_cast<std::uint8_t>(255.0 * (d - min_d) / (max_d - min_d)) : 0;
+      }
+    }
+    cv::applyColorMap(scaled, disp_colour, cv::COLORMAP_TURBO);
+    disp_colour.setTo(cv::Scalar::all(0), disparity == std::numeric_limits<float>::infinity());
+  }
+  if (!histogram.empty()) {
+    cv::Mat h8, flipped;
+    double hi = 0;
+    cv::minMaxLoc(histogram, nullptr, &hi);
+    histogram.convertTo(h8, CV_8U, hi > 0 ? 255.0 / hi : 0);
+    cv::flip(h8, flipped, 0);  // larger disparity (nearer) up
+    cv::applyColorMap(flipped, hist_colour, cv::COLORMAP_HOT);
+  }
+  if (!obstacle.empty()) {
+    cv::Mat o8;
+    if (obstacle.type() == CV_32F) {
+      cv::Mat flipped;
+      cv::flip(obstacle > 0, flipped, 0);
+      o8 = flipped;
+    } else {
+      o8 = obstacle;
+    }
+    cv::dilate(o8, o8, cv::Mat());
+    cv::cvtColor(o8, obst_colour, cv::COLOR_GRAY2BGR);
+  }
+  cv::Mat top, middle, bottom, out;
+  cv::hconcat(Panel(reference, panel, title + ": reference"), Panel(other, panel, "matched"), top);
+  cv::hconcat(Panel(composite, panel, "composite"), Panel(disp_colour, panel, "disparity"), middle);
+  cv::hconcat(Panel(hist_colour, panel, "column histogram"), Panel(obst_colour, panel, "obstacles"), bottom);
+  cv::vconcat(std::vector<cv::Mat>{top, middle, bottom}, out);
+  return out;
 }
 
 }  // namespace dps

@@ -12,13 +12,15 @@ PipelineOptions DefaultPipelineOptions(const Rig& rig) {
   PipelineOptions o;
   const double s = rig.Camera("left").model.width() / 640.0;
   const int w = std::max(64, static_cast<int>(std::lround(400 * s))), h = std::max(32, static_cast<int>(std::lround(200 * s)));
-  const int d = std::max(16, static_cast<int>(std::lround(64 * s / 16.0)) * 16);
+  // 96 disparities at 640 px: with a 2 m baseline and f = 170 px the front pair then sees down to
+  // 3.5 m, and the side pairs cover vehicles passing at up to about 7 m/s relative speed (15 fps).
+  const int d = std::max(16, static_cast<int>(std::lround(96 * s / 16.0)) * 16);
   const int block = s >= 0.75 ? 9 : 7;
   for (StereoOptions* st : {&o.front.stereo, &o.side.stereo}) {
     st->num_disparities = d;
     st->block_width = st->block_height = block;
   }
-  o.side.stereo.min_disparity = -d / 4;
+  o.side.stereo.min_disparity = -(d * 5) / 12;  // -40 of 96
   o.front.view_width = o.side.view_width = w;
   o.front.view_height = o.side.view_height = h;
   o.front.focal_px = o.side.focal_px = 170.0 * s;

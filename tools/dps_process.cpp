@@ -28,6 +28,8 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --jobs N              process N drives at once (default 1)
   --force               redo drives whose outputs are complete
   --map-png             also write map/NNNNNN.png
+  --diagnostics         also write diagnostics.avi: six panels per source (views, composite,
+                        disparity, column histogram, obstacles) and diagnostics_middle.png
   --no-video            no map.avi
   --truncate            left and right differ in length: use the shorter
   --image-fps F         frame rate of image folders without frames.csv (default 30)
@@ -48,7 +50,7 @@ int main(int argc, char** argv) {
     const dps_cli::Args args(argc, argv,
                              {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
                               "yaw-scale", "time-column", "yaw-file"},
-                             {"force", "map-png", "no-video", "truncate", "quiet"});
+                             {"force", "map-png", "no-video", "truncate", "quiet", "diagnostics"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -71,6 +73,7 @@ int main(int argc, char** argv) {
     dps::DriveOptions options;
     options.map_video = !args.Has("no-video");
     options.map_png = args.Has("map-png");
+    options.diagnostics = args.Has("diagnostics");
     options.truncate = args.Has("truncate");
     options.image_fps = args.Number("image-fps", 30.0);
     if (!(options.image_fps > 0)) throw dps::Error("option --image-fps: expected > 0");

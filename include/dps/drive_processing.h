@@ -20,6 +20,7 @@ struct DriveOptions {
   double image_fps = 30.0;        // frame rate of image folders without frames.csv, > 0
   bool map_video = true;          // map.avi (MJPG)
   bool map_png = false;           // map/NNNNNN.png
+  bool diagnostics = false;       // diagnostics.avi: six panels per source (DrawDiagnostics)
   MapOptions map;
   bool truncate = false;          // left and right with different frame counts: use the shorter
 };

@@ -25,4 +25,13 @@ struct MapOptions {
 cv::Mat DrawSurroundMap(const std::vector<Detection>& detections, const Vehicle& vehicle,
                         const Coverage& coverage, const MapOptions& options, const std::string& caption);
 
+// The paper's six-panel diagnostics of one source (Fig. 7, 9-10), each panel the size of the
+// views: the two matched views, their composite (left in red, right in cyan), the colour-coded
+// disparity, the column histogram (disparity up, columns across) and the obstacle image. For the
+// front the obstacle image is the histogram-shaped image of centroid disparities; for a side, the
+// bottom-most pixels in the view. Empty results give a grey panel set with the title.
+cv::Mat DrawDiagnostics(const std::string& title, const cv::Mat& reference_view, const cv::Mat& other_view,
+                        const cv::Mat& disparity, const cv::Mat& histogram, const cv::Mat& obstacle,
+                        double min_disparity, double max_disparity, cv::Size panel);
+
 }  // namespace dps
