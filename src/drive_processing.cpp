@@ -118,6 +118,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       }
     }
     const bool png = o.map_png || (o.map_video && !video.isOpened());
+    const cv::Mat map_background = DrawMapBackground(rig.vehicle, pipeline.coverage(), o.map);
     cv::VideoWriter diagnostics;
     const std::string diagnostics_tmp = (tmp / ".diagnostics.tmp.avi").string();
     if (png) fs::create_directories(tmp / "map");
@@ -158,7 +159,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       char caption[128];
       std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
                     out.detections.size());
-      const cv::Mat map = DrawSurroundMap(out.detections, rig.vehicle, pipeline.coverage(), o.map, caption);
+      const cv::Mat map = DrawSurroundMap(map_background, out.detections, o.map, caption);
       auto t3 = Clock::now();
       map_s += Seconds(t2, t3);
       if (video.isOpened()) video.write(map);

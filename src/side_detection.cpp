@@ -42,6 +42,26 @@ SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
 
 SideDetector::~SideDetector() = default;
 
+const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view, long key) {
+  const auto it = geometry_.find(key);
+  if (it != geometry_.end()) return it->second;
+  if (geometry_.size() > 64) geometry_.clear();  // a long turn through many yaws
+  const ViewSpec& spec = view.spec();
+  ViewGeometry g;
+  g.ignore = OwnCarMask(view, vehicle_, options_.own_car_height_m);
+  cv::bitwise_or(g.ignore, view.mask() == 0, g.ignore);
+  g.inverse_depth = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(0));
+  for (int y = 0; y < spec.height; ++y) {
+    for (int x = 0; x < spec.width; ++x) {
+      Eigen::Vector3d p;
+      if (!PixelToGround(view, x, y, &p)) continue;
+      const double depth = (spec.vehicle_from_view.transpose() * (p - view.viewpoint_vehicle())).z();
+      if (depth > 0) g.inverse_depth.at<float>(y, x) = static_cast<float>(1.0 / depth);
+    }
+  }
+  return geometry_.emplace(key, std::move(g)).first->second;
+}
+
 SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
                                 const PlanarPose& current_in_previous) {
   SideResult r;
@@ -71,21 +91,14 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   r.other_view = previous_is_reference ? current : previous;
   const ViewSpec& spec = reference.spec();
 
+  const double reference_yaw = previous_is_reference ? sign * alpha : sign * (alpha - current_in_previous.heading_rad);
+  const ViewGeometry& geometry = Geometry(reference, views_->Key(reference_yaw));
+  const cv::Mat& ignore = geometry.ignore;
   r.disparity = matcher_->Compute(r.reference_view, r.other_view);
-  cv::Mat ignore = OwnCarMask(reference, vehicle_, options_.own_car_height_m);
-  cv::bitwise_or(ignore, reference.mask() == 0, ignore);
   r.disparity.setTo(kInvalidDisparity, ignore);
-
   // The road's disparity: f B / depth of the ground point along the view axis.
-  cv::Mat road(spec.height, spec.width, CV_32F, cv::Scalar(kInvalidDisparity));
-  for (int y = 0; y < spec.height; ++y) {
-    for (int x = 0; x < spec.width; ++x) {
-      Eigen::Vector3d g;
-      if (!PixelToGround(reference, x, y, &g)) continue;
-      const double depth = (spec.vehicle_from_view.transpose() * (g - reference.viewpoint_vehicle())).z();
-      if (depth > 0) road.at<float>(y, x) = static_cast<float>(spec.focal_px * r.baseline_m / depth);
-    }
-  }
+  cv::Mat road = geometry.inverse_depth * (spec.focal_px * r.baseline_m);
+  road.setTo(kInvalidDisparity, geometry.inverse_depth == 0);
   const HistogramOptions& ho = options_.histogram;
   r.score = ScoreImage(r.disparity, road, ho, RoadRamp(road, options_.stereo.block_height / 2 + 1));
   cv::Mat moments, labels;

@@ -7,11 +7,24 @@
 
 namespace dps {
 
-cv::Mat DrawSurroundMap(const std::vector<Detection>& detections, const Vehicle& vehicle,
-                        const Coverage& coverage, const MapOptions& o, const std::string& caption) {
-  const double scale = o.size_px / (2.0 * o.range_m);  // px per metre
-  const cv::Point2d centre(o.size_px / 2.0, o.size_px / 2.0);
-  auto to_px = [&](double x, double z) { return cv::Point(cvRound(centre.x + x * scale), cvRound(centre.y - z * scale)); };
+namespace {
+
+// Vehicle-frame (x, z) to map pixels: the vehicle origin at the centre, +Z up.
+struct MapProjection {
+  double scale;  // px per metre
+  cv::Point2d centre;
+  explicit MapProjection(const MapOptions& o)
+      : scale(o.size_px / (2.0 * o.range_m)), centre(o.size_px / 2.0, o.size_px / 2.0) {}
+  cv::Point operator()(double x, double z) const {
+    return cv::Point(cvRound(centre.x + x * scale), cvRound(centre.y - z * scale));
+  }
+};
+
+}  // namespace
+
+cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& o) {
+  const MapProjection to_px(o);
+  const double scale = to_px.scale;
   cv::Mat map(o.size_px, o.size_px, CV_8UC3, cv::Scalar(255, 255, 255));
 
   // Coverage: each sector lightly shaded.
@@ -38,6 +51,17 @@ cv::Mat DrawSurroundMap(const std::vector<Detection>& detections, const Vehicle&
   // The own car.
   cv::rectangle(map, to_px(-vehicle.width_m / 2, vehicle.length_m / 2), to_px(vehicle.width_m / 2, -vehicle.length_m / 2),
                 cv::Scalar(0, 0, 0), cv::FILLED);
+  const cv::Point bar(12, o.size_px - 14);
+  cv::line(map, bar, bar + cv::Point(cvRound(5 * scale), 0), cv::Scalar(0, 0, 0), 2);
+  cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  return map;
+}
+
+cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections, const MapOptions& o,
+                        const std::string& caption) {
+  const MapProjection to_px(o);
+  const double scale = to_px.scale;
+  cv::Mat map = background.clone();
   // Obstacles: ground points joined, closed in the picture.
   cv::Mat mask(map.size(), CV_8U, cv::Scalar(0));
   for (const Detection& d : detections) {
@@ -51,10 +75,6 @@ cv::Mat DrawSurroundMap(const std::vector<Detection>& detections, const Vehicle&
                    cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(cvRound(scale) | 1, cvRound(scale) | 1)));
   map.setTo(cv::Scalar(0, 0, 220), mask);
   for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, cv::Scalar(0, 0, 120), cv::FILLED, cv::LINE_AA);
-  // Scale bar and caption.
-  const cv::Point bar(12, o.size_px - 14);
-  cv::line(map, bar, bar + cv::Point(cvRound(5 * scale), 0), cv::Scalar(0, 0, 0), 2);
-  cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return map;
 }

@@ -123,8 +123,10 @@ SideViewCache::SideViewCache(const RigCamera& camera, Side side, int width, int 
   if (capacity < 1) throw Error("side view cache: capacity must be >= 1");
 }
 
+long SideViewCache::Key(double yaw_rad) const { return std::lround(yaw_rad / step_); }
+
 const VirtualView& SideViewCache::Get(double yaw_rad) {
-  const long key = std::lround(yaw_rad / step_);
+  const long key = Key(yaw_rad);
   for (auto it = views_.begin(); it != views_.end(); ++it) {
     if (it->first == key) {
       views_.splice(views_.begin(), views_, it);  // most recently used first

@@ -13,6 +13,7 @@
 // current frame.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -69,6 +70,13 @@ class SideDetector {
   Side side_;
   Vehicle vehicle_;
   SideDetectorOptions options_;
+  // Per view (by yaw grid index): pixels to ignore (no source, own car) and the inverse depth of
+  // the road along the view axis (0 where there is no road); the road's disparity is f B times it.
+  struct ViewGeometry {
+    cv::Mat ignore, inverse_depth;
+  };
+  const ViewGeometry& Geometry(const VirtualView& view, long key);
+  std::map<long, ViewGeometry> geometry_;
   std::unique_ptr<SideViewCache> views_;
   std::unique_ptr<SadStereoMatcher> matcher_;
 };

@@ -20,10 +20,14 @@ struct MapOptions {
   double ring_step_m = 5.0;
 };
 
-// The map for one frame. Obstacles are drawn as their ground points joined in order and thickened
-// by a closing in the picture (the paper's morphological smoothing, erring towards the car).
-cv::Mat DrawSurroundMap(const std::vector<Detection>& detections, const Vehicle& vehicle,
-                        const Coverage& coverage, const MapOptions& options, const std::string& caption);
+// What every frame's map shares: coverage shading, range rings, the own car, the scale bar.
+cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& options);
+
+// The map for one frame over a background from DrawMapBackground (same options). Obstacles are
+// drawn as their ground points joined in order and thickened by a closing in the picture (the
+// paper's morphological smoothing, erring towards the car).
+cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections,
+                        const MapOptions& options, const std::string& caption);
 
 // The paper's six-panel diagnostics of one source (Fig. 7, 9-10), each panel the size of the
 // views: the two matched views, their composite (left in red, right in cyan), the colour-coded

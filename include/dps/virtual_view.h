@@ -94,6 +94,8 @@ class SideViewCache {
 
   // The view for the yaw nearest to yaw_rad on the quantisation grid.
   const VirtualView& Get(double yaw_rad);
+  // The grid index of a yaw (equal indices, same view).
+  long Key(double yaw_rad) const;
   size_t builds() const { return builds_; }  // tables built so far
 
  private:
