@@ -107,6 +107,9 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   try {
     SurroundPipeline pipeline(rig, o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline);
     std::vector<Detection> detections;
+    Tracker tracker(o.tracker);
+    std::vector<TrackState> tracks;
+    PlanarPose ego;  // the vehicle in the tracker's world (its pose at frame 0)
     cv::VideoWriter video;
     const std::string video_tmp = (tmp / ".map.tmp.avi").string();
     if (o.map_video) {
@@ -152,6 +155,8 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
         }
       }
       FrameOutput out = pipeline.Process(in);
+      if (in.motion_known) ego = Compose(ego, in.current_in_previous);
+      const std::vector<TrackState> frame_tracks = tracker.Update(f, times[f], ego, out.detections);
       s.front_vertical_offset_px = out.front.vertical_offset_px;
       front += out.front_ms / 1000.0;
       sides += out.sides_ms / 1000.0;
@@ -159,7 +164,11 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       char caption[128];
       std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
                     out.detections.size());
-      const cv::Mat map = DrawSurroundMap(map_background, out.detections, o.map, caption);
+      cv::Mat map = DrawSurroundMap(map_background, out.detections, o.map, caption);
+      DrawTracks(map, frame_tracks, o.map);
+      for (const TrackState& t : frame_tracks) {
+        if (t.confirmed) tracks.push_back(t);
+      }
       auto t3 = Clock::now();
       map_s += Seconds(t2, t3);
       if (video.isOpened()) video.write(map);
@@ -203,6 +212,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       RenameReplacing(diagnostics_tmp, (tmp / "diagnostics.avi").string());
     }
     WriteDetections(detections, (tmp / "detections.csv").string());
+    WriteTracks(tracks, (tmp / "tracks.csv").string());
     write += Seconds(t4, Clock::now());
     s.frames = frames;
     s.detections = static_cast<int>(detections.size());

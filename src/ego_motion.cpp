@@ -64,6 +64,11 @@ PlanarPose MotionProfile::Integrate(const PlanarPose& start, double t0, double t
   return p;
 }
 
+PlanarPose Compose(const PlanarPose& a, const PlanarPose& b) {
+  const double c = std::cos(a.heading_rad), s = std::sin(a.heading_rad);
+  return {a.x_m + c * b.x_m + s * b.z_m, a.z_m - s * b.x_m + c * b.z_m, a.heading_rad + b.heading_rad};
+}
+
 Eigen::Vector2d WorldToBody(const PlanarPose& pose, const Eigen::Vector2d& w) {
   return WorldToBodyDirection(pose, w - Eigen::Vector2d(pose.x_m, pose.z_m));
 }

@@ -1,5 +1,7 @@
 #include "dps/evaluation.h"
 
+#include "dps/tracker.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -43,6 +45,7 @@ double BandScore::Precision() const { return detections ? double(matched_detecti
 double BandScore::MedianRangeError() const { return Quantile(range_errors_m, 0.5); }
 double BandScore::RangeErrorP90() const { return Quantile(range_errors_m, 0.9); }
 double BandScore::MedianRelativeRangeError() const { return Quantile(relative_errors, 0.5); }
+double BandScore::MedianVelocityError() const { return Quantile(velocity_errors_mps, 0.5); }
 double SourceScore::Precision() const { return detections ? double(matched) / detections : 1.0; }
 
 EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
@@ -125,9 +128,13 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
         ++b->objects;
         if (object_match[i] >= 0) {
           ++b->matched_objects;
-          const double error = std::abs(dets[object_match[i]]->range_m - range);
+          const Detection& d = *dets[object_match[i]];
+          const double error = std::abs(d.range_m - range);
           b->range_errors_m.push_back(error);
           b->relative_errors.push_back(error / std::max(range, 1e-6));
+          if (d.has_velocity) {
+            b->velocity_errors_mps.push_back(std::hypot(d.vx_mps - objects[i]->vx_mps, d.vz_mps - objects[i]->vz_mps));
+          }
         }
       }
     }
@@ -144,6 +151,49 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
     }
   }
   return result;
+}
+
+TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std::vector<TruthRow>& truth,
+                               const EvaluationOptions& options) {
+  std::vector<Detection> as_detections;
+  for (const TrackState& t : tracks) {
+    if (!t.confirmed) continue;
+    Detection d = DetectionFromPoints({{t.x_m, t.z_m}}, "track");
+    d.frame = t.frame;
+    d.t_s = t.t_s;
+    d.id = t.id;
+    d.has_velocity = true;
+    d.vx_mps = t.vx_mps;
+    d.vz_mps = t.vz_mps;
+    as_detections.push_back(d);
+  }
+  TrackEvaluation out;
+  out.positions = Evaluate(as_detections, truth, options);
+  // Identity switches: per frame, match each counted object to its nearest track within the
+  // tolerance and compare the track id with the object's previous one.
+  std::map<int, std::vector<const Detection*>> by_frame;
+  for (const Detection& d : as_detections) by_frame[d.frame].push_back(&d);
+  std::map<int, int> last_track;  // truth id -> track id
+  for (const TruthRow& t : truth) {
+    const Eigen::Vector2d near = NearPoint(t);
+    if (near.norm() > options.max_range_m || !options.coverage.Contains(near)) continue;
+    const double tolerance = std::max(0.75, 0.1 * near.norm());
+    const Detection* best = nullptr;
+    double best_d = tolerance;
+    for (const Detection* d : by_frame[t.frame]) {
+      const double dist = DistanceToFootprint(t, {d->x_m, d->z_m});
+      if (dist <= best_d) best_d = dist, best = d;
+    }
+    if (!best) continue;
+    const auto it = last_track.find(t.id);
+    if (it == last_track.end()) {
+      ++out.objects_tracked;
+    } else if (it->second != best->id) {
+      ++out.id_switches;
+    }
+    last_track[t.id] = best->id;
+  }
+  return out;
 }
 
 std::string EvaluationTable(const EvaluationResult& r) {
@@ -178,7 +228,8 @@ std::string EvaluationJson(const EvaluationResult& r) {
         << ", \"matched_detections\": " << b.matched_detections << ", \"precision\": " << Number(b.Precision(), 4)
         << ", \"range_error_median_m\": " << Number(b.MedianRangeError(), 4)
         << ", \"range_error_p90_m\": " << Number(b.RangeErrorP90(), 4)
-        << ", \"range_error_median_relative\": " << Number(b.MedianRelativeRangeError(), 4) << "}";
+        << ", \"range_error_median_relative\": " << Number(b.MedianRelativeRangeError(), 4)
+        << ", \"velocity_error_median_mps\": " << Number(b.MedianVelocityError(), 4) << "}";
   };
   out << "{\n  \"overall\": ";
   band(r.overall);

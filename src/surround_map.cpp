@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
 
 namespace dps {
@@ -77,6 +78,24 @@ cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>&
   for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, cv::Scalar(0, 0, 120), cv::FILLED, cv::LINE_AA);
   cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return map;
+}
+
+void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOptions& o) {
+  const MapProjection to_px(o);
+  for (const TrackState& t : tracks) {
+    if (!t.confirmed) continue;
+    const cv::Point at = to_px(t.x_m, t.z_m), ahead = to_px(t.predicted.x(), t.predicted.y());
+    // The prediction's 1-sigma ellipse (map y points against z).
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(t.predicted_cov);
+    const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+    const double angle = std::atan2(-axis.y(), axis.x()) * 180.0 / 3.14159265358979323846;
+    const cv::Size axes(std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(1))) * to_px.scale)),
+                        std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(0))) * to_px.scale)));
+    cv::ellipse(map, ahead, axes, angle, 0, 360, cv::Scalar(200, 120, 0), 1, cv::LINE_AA);
+    cv::arrowedLine(map, at, ahead, cv::Scalar(200, 80, 0), 2, cv::LINE_AA, 0, 0.2);
+    cv::putText(map, std::to_string(t.id), at + cv::Point(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                cv::Scalar(200, 80, 0), 1, cv::LINE_AA);
+  }
 }
 
 namespace {

@@ -1,4 +1,5 @@
 // dps-eval: scores detections.csv against truth.csv (DESIGN.md §5).
+#include <cstdio>
 #include <iostream>
 
 #include "cli.h"
@@ -6,10 +7,11 @@
 #include "dps/evaluation.h"
 #include "dps/rig_io.h"
 #include "dps/surround_pipeline.h"
+#include "dps/tracker.h"
 
 namespace {
 
-const char* kUsage = R"(usage: dps-eval --detections detections.csv --truth truth.csv [options]
+const char* kUsage = R"(usage: dps-eval --detections detections.csv [--tracks tracks.csv] --truth truth.csv [options]
 
 Scores detections against ground truth (DESIGN.md §5): per frame, a truth object counts when the
 point of its footprint nearest to the vehicle (its near point) is within --max-range and inside
@@ -22,6 +24,9 @@ cameras' midpoint, each side view from its camera, each +-atan(width / 2f)); wit
 direction counts.
 
   --detections FILE   detections.csv
+  --tracks FILE       tracks.csv: scored the same way on (x, z), plus the median velocity error
+                      |v_track - v_truth| and the identity switches (a truth object matched by a
+                      different track than before)
   --truth FILE        truth.csv
   --max-range M       evaluated zone, metres (default 20)
   --rig FILE          rig.yaml for the field of view
@@ -33,14 +38,13 @@ direction counts.
 
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-eval", [&] {
-    const dps_cli::Args args(argc, argv, {"detections", "truth", "max-range", "rig", "json"}, {});
+    const dps_cli::Args args(argc, argv, {"detections", "tracks", "truth", "max-range", "rig", "json"}, {});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
     }
-    for (const char* required : {"detections", "truth"}) {
-      if (!args.Has(required)) throw dps::Error(std::string("missing --") + required + " (see --help)");
-    }
+    if (!args.Has("truth")) throw dps::Error("missing --truth (see --help)");
+    if (!args.Has("detections") && !args.Has("tracks")) throw dps::Error("missing --detections or --tracks (see --help)");
     dps::EvaluationOptions options;
     options.max_range_m = args.Number("max-range", 20.0);
     if (!(options.max_range_m > 0)) throw dps::Error("option --max-range: expected > 0");
@@ -48,10 +52,22 @@ int main(int argc, char** argv) {
       const dps::Rig rig = dps::ReadRig(args.Get("rig"));
       options.coverage = dps::PipelineCoverage(rig, dps::DefaultPipelineOptions(rig));
     }
-    const dps::EvaluationResult r =
-        dps::Evaluate(dps::ReadDetections(args.Get("detections")), dps::ReadTruth(args.Get("truth")), options);
-    std::cout << dps::EvaluationTable(r);
-    if (args.Has("json")) dps::WriteFileAtomically(args.Get("json"), dps::EvaluationJson(r));
+    const std::vector<dps::TruthRow> truth = dps::ReadTruth(args.Get("truth"));
+    std::string json;
+    if (args.Has("detections")) {
+      const dps::EvaluationResult r = dps::Evaluate(dps::ReadDetections(args.Get("detections")), truth, options);
+      std::cout << dps::EvaluationTable(r);
+      json = dps::EvaluationJson(r);
+    }
+    if (args.Has("tracks")) {
+      const dps::TrackEvaluation r = dps::EvaluateTracks(dps::ReadTracks(args.Get("tracks")), truth, options);
+      std::cout << "tracks:\n" << dps::EvaluationTable(r.positions);
+      std::printf("velocity error median %.3f m/s; %d objects tracked, %d identity switches\n",
+                  r.positions.overall.MedianVelocityError(), r.objects_tracked, r.id_switches);
+      json = "{\"detections\": " + (json.empty() ? std::string("null") : json) + ", \"tracks\": " +
+             dps::EvaluationJson(r.positions) + ", \"id_switches\": " + std::to_string(r.id_switches) + "}\n";
+    }
+    if (args.Has("json")) dps::WriteFileAtomically(args.Get("json"), json);
     return 0;
   });
 }

@@ -21,6 +21,8 @@ struct Detection {
   double x_min_m = 0.0, x_max_m = 0.0, z_min_m = 0.0, z_max_m = 0.0;
   int n_points = 0;
   std::vector<Eigen::Vector2d> points;  // ground points (x, z), for the map; not in the CSV
+  bool has_velocity = false;            // tracks scored as detections carry their velocity
+  double vx_mps = 0.0, vz_mps = 0.0;
 };
 
 // A detection summarising ground points (at least one): nearest point, extent, count.

@@ -1,5 +1,5 @@
-// dps — processing one recorded drive into detections.csv, the surround-map video and
-// summary.json (what dps-process does for each drive).
+// dps — processing one recorded drive into detections.csv, tracks.csv, the surround-map video
+// and summary.json (what dps-process does for each drive).
 #pragma once
 
 #include <functional>
@@ -10,6 +10,7 @@
 #include "dps/drive_io.h"
 #include "dps/surround_map.h"
 #include "dps/surround_pipeline.h"
+#include "dps/tracker.h"
 
 namespace dps {
 
@@ -22,6 +23,7 @@ struct DriveOptions {
   bool map_png = false;           // map/NNNNNN.png
   bool diagnostics = false;       // diagnostics.avi: six panels per source (DrawDiagnostics)
   MapOptions map;
+  TrackerOptions tracker;
   bool truncate = false;          // left and right with different frame counts: use the shorter
 };
 

@@ -55,6 +55,9 @@ class MotionProfile {
   std::vector<MotionSample> samples_{MotionSample{}};
 };
 
+// The pose `b`, given in the body frame of `a`, in the frame `a` is given in: a * b.
+PlanarPose Compose(const PlanarPose& a, const PlanarPose& b);
+
 // Expresses a world point in the body frame of `pose` (ground plane, x right, z forward).
 Eigen::Vector2d WorldToBody(const PlanarPose& pose, const Eigen::Vector2d& world_xz);
 // Expresses a world direction (e.g. a velocity) in the body frame of `pose`.

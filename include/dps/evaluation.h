@@ -53,6 +53,8 @@ struct BandScore {
   double RangeErrorP90() const;
   double MedianRelativeRangeError() const;  // |error| / object range, NaN when no match
   std::vector<double> relative_errors;
+  std::vector<double> velocity_errors_mps;  // |v_detection - v_truth| of matches with a velocity
+  double MedianVelocityError() const;       // NaN when none
 };
 
 struct SourceScore {
@@ -72,6 +74,18 @@ struct EvaluationResult {
 // Scores detections against truth (frames matched by index).
 EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
                           const EvaluationOptions& options);
+
+// Tracks scored like detections (DESIGN.md §5: the same matching on (x, z)), with the velocity
+// error |v_track - v_truth| of each match; also counts identity switches: a truth object matched
+// by a different track id than in its previous matched frame.
+struct TrackEvaluation {
+  EvaluationResult positions;
+  int id_switches = 0;
+  int objects_tracked = 0;   // truth ids matched at least once
+};
+struct TrackState;
+TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std::vector<TruthRow>& truth,
+                               const EvaluationOptions& options);
 
 // A table for people (per band and per source) and a JSON document for scripts.
 std::string EvaluationTable(const EvaluationResult& result);

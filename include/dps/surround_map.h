@@ -11,6 +11,7 @@
 #include "dps/detection.h"
 #include "dps/evaluation.h"
 #include "dps/rig.h"
+#include "dps/tracker.h"
 
 namespace dps {
 
@@ -28,6 +29,10 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
 // paper's morphological smoothing, erring towards the car).
 cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections,
                         const MapOptions& options, const std::string& caption);
+
+// Draws the confirmed tracks onto a map picture: id, an arrow to the position predicted ahead and
+// the 1-sigma ellipse of that prediction.
+void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOptions& options);
 
 // The paper's six-panel diagnostics of one source (Fig. 7, 9-10), each panel the size of the
 // views: the two matched views, their composite (left in red, right in cyan), the colour-coded

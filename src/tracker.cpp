@@ -1,0 +1,242 @@
+#include "dps/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "dps/atomic_file.h"
+#include "dps/csv.h"
+#include "dps/error.h"
+
+namespace dps {
+namespace {
+
+void Require(bool ok, const char* field, double value, const char* constraint) {
+  if (!ok) throw Error(Str("tracker option ", field, " = ", value, ": violated constraint ", constraint));
+}
+
+// Rotation taking vehicle (x, z) into the world for a planar pose (heading towards +X).
+Eigen::Matrix2d WorldFromVehicleRotation(const PlanarPose& p) {
+  const double c = std::cos(p.heading_rad), s = std::sin(p.heading_rad);
+  Eigen::Matrix2d R;
+  R << c, s, -s, c;
+  return R;
+}
+
+}  // namespace
+
+void TrackerOptions::Check() const {
+  Require(accel_sigma_mps2 > 0, "accel_sigma_mps2", accel_sigma_mps2, "> 0");
+  Require(meas_sigma_m > 0, "meas_sigma_m", meas_sigma_m, "> 0");
+  Require(meas_sigma_per_m >= 0, "meas_sigma_per_m", meas_sigma_per_m, ">= 0");
+  Require(init_speed_sigma_mps > 0, "init_speed_sigma_mps", init_speed_sigma_mps, "> 0");
+  Require(gate_chi2 > 0, "gate_chi2", gate_chi2, "> 0");
+  Require(confirm_hits >= 1, "confirm_hits", confirm_hits, ">= 1");
+  Require(max_misses >= 1, "max_misses", max_misses, ">= 1");
+  Require(predict_ahead_s >= 0, "predict_ahead_s", predict_ahead_s, ">= 0");
+}
+
+std::vector<int> HungarianAssignment(const std::vector<std::vector<double>>& cost, double forbidden) {
+  const int rows = static_cast<int>(cost.size());
+  if (rows == 0) return {};
+  const int cols = static_cast<int>(cost[0].size());
+  const int n = std::max(rows, cols);
+  // Square matrix; padding and forbidden entries get a large cost (never preferred to a real one).
+  const double big = forbidden * 2 + 1;
+  auto a = [&](int i, int j) {
+    if (i >= rows || j >= cols) return big;
+    return cost[i][j] >= forbidden ? big : cost[i][j];
+  };
+  // Potentials method (1-based), O(n^3).
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> u(n + 1, 0), v(n + 1, 0);
+  std::vector<int> p(n + 1, 0), way(n + 1, 0);
+  for (int i = 1; i <= n; ++i) {
+    p[0] = i;
+    int j0 = 0;
+    std::vector<double> minv(n + 1, inf);
+    std::vector<char> used(n + 1, false);
+    do {
+      used[j0] = true;
+      const int i0 = p[j0];
+      double delta = inf;
+      int j1 = 0;
+      for (int j = 1; j <= n; ++j) {
+        if (used[j]) continue;
+        const double cur = a(i0 - 1, j - 1) - u[i0] - v[j];
+        if (cur < minv[j]) minv[j] = cur, way[j] = j0;
+        if (minv[j] < delta) delta = minv[j], j1 = j;
+      }
+      for (int j = 0; j <= n; ++j) {
+        if (used[j]) {
+          u[p[j]] += delta;
+          v[j] -= delta;
+        } else {
+          minv[j] -= delta;
+        }
+      }
+      j0 = j1;
+    } while (p[j0] != 0);
+    do {
+      const int j1 = way[j0];
+      p[j0] = p[j1];
+      j0 = j1;
+    } while (j0);
+  }
+  std::vector<int> out(rows, -1);
+  for (int j = 1; j <= n; ++j) {
+    const int i = p[j] - 1;
+    if (i >= 0 && i < rows && j - 1 < cols && cost[i][j - 1] < forbidden) out[i] = j - 1;
+  }
+  return out;
+}
+
+Tracker::Tracker(const TrackerOptions& options) : options_(options) { options_.Check(); }
+
+std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose& ego,
+                                        const std::vector<Detection>& detections) {
+  const double dt = started_ ? std::max(0.0, t_s - last_t_) : 0.0;
+  started_ = true;
+  last_t_ = t_s;
+  // Predict (constant velocity, white acceleration noise).
+  Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
+  F(0, 2) = F(1, 3) = dt;
+  const double q = options_.accel_sigma_mps2 * options_.accel_sigma_mps2;
+  Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
+  Q(0, 0) = Q(1, 1) = q * dt * dt * dt * dt / 4;
+  Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = q * dt * dt * dt / 2;
+  Q(2, 2) = Q(3, 3) = q * dt * dt;
+  for (Track& t : tracks_) {
+    t.x = F * t.x;
+    t.P = F * t.P * F.transpose() + Q;
+    ++t.age;
+  }
+  // Measurements in the world.
+  const Eigen::Matrix2d Rw = WorldFromVehicleRotation(ego);
+  const Eigen::Vector2d tw(ego.x_m, ego.z_m);
+  std::vector<Eigen::Vector2d> z;
+  std::vector<Eigen::Matrix2d> R;
+  for (const Detection& d : detections) {
+    z.push_back(Rw * Eigen::Vector2d(d.x_m, d.z_m) + tw);
+    const double s = options_.meas_sigma_m + options_.meas_sigma_per_m * d.range_m;
+    R.push_back(Eigen::Matrix2d::Identity() * s * s);  // isotropic: the same in the world
+  }
+  // Gated Mahalanobis costs and the optimal assignment.
+  const double forbidden = 1e12;
+  std::vector<std::vector<double>> cost(tracks_.size(), std::vector<double>(z.size(), forbidden));
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    for (size_t j = 0; j < z.size(); ++j) {
+      const Eigen::Vector2d innovation = z[j] - tracks_[i].x.head<2>();
+      const Eigen::Matrix2d S = tracks_[i].P.topLeftCorner<2, 2>() + R[j];
+      const double d2 = innovation.dot(S.ldlt().solve(innovation));
+      if (d2 <= options_.gate_chi2) cost[i][j] = d2;
+    }
+  }
+  const std::vector<int> assigned = HungarianAssignment(cost, forbidden);
+  std::vector<bool> used(z.size(), false);
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    Track& t = tracks_[i];
+    const int j = i < assigned.size() ? assigned[i] : -1;
+    if (j < 0) {
+      ++t.misses;
+      continue;
+    }
+    used[j] = true;
+    // Update (H = [I 0]).
+    const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + R[j];
+    const Eigen::Matrix<double, 4, 2> K = t.P.leftCols<2>() * S.inverse();
+    t.x += K * (z[j] - t.x.head<2>());
+    t.P = (Eigen::Matrix4d::Identity() - K * (Eigen::Matrix<double, 2, 4>() << Eigen::Matrix2d::Identity(),
+                                                Eigen::Matrix2d::Zero()).finished()) * t.P;
+    ++t.hits;
+    t.misses = 0;
+    if (t.hits >= options_.confirm_hits) t.confirmed = true;
+  }
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const Track& t) { return t.misses > options_.max_misses || (!t.confirmed && t.misses > 0); }),
+                tracks_.end());
+  for (size_t j = 0; j < z.size(); ++j) {
+    if (used[j]) continue;
+    Track t;
+    t.id = next_id_++;
+    t.x << z[j], 0, 0;
+    t.P = Eigen::Matrix4d::Zero();
+    t.P.topLeftCorner<2, 2>() = R[j];
+    t.P(2, 2) = t.P(3, 3) = options_.init_speed_sigma_mps * options_.init_speed_sigma_mps;
+    t.hits = 1;
+    t.confirmed = options_.confirm_hits <= 1;
+    tracks_.push_back(t);
+  }
+  // Report in the current vehicle frame.
+  std::vector<TrackState> out;
+  const Eigen::Matrix2d Rv = Rw.transpose();
+  for (const Track& t : tracks_) {
+    TrackState s;
+    s.frame = frame;
+    s.t_s = t_s;
+    s.id = t.id;
+    const Eigen::Vector2d p = Rv * (t.x.head<2>() - tw), v = Rv * t.x.tail<2>();
+    const Eigen::Matrix2d cov = Rv * t.P.topLeftCorner<2, 2>() * Rv.transpose();
+    s.x_m = p.x();
+    s.z_m = p.y();
+    s.vx_mps = v.x();
+    s.vz_mps = v.y();
+    s.sigma_x_m = std::sqrt(std::max(0.0, cov(0, 0)));
+    s.sigma_z_m = std::sqrt(std::max(0.0, cov(1, 1)));
+    s.age = t.age;
+    s.confirmed = t.confirmed;
+    // Prediction ahead, in the current vehicle frame (the ego's own motion is not predicted).
+    const double h = options_.predict_ahead_s;
+    Eigen::Matrix4d Fh = Eigen::Matrix4d::Identity();
+    Fh(0, 2) = Fh(1, 3) = h;
+    const Eigen::Vector4d xh = Fh * t.x;
+    Eigen::Matrix4d Ph = Fh * t.P * Fh.transpose();
+    Ph(0, 0) += q * h * h * h * h / 4;
+    Ph(1, 1) += q * h * h * h * h / 4;
+    s.predicted = Rv * (xh.head<2>() - tw);
+    s.predicted_cov = Rv * Ph.topLeftCorner<2, 2>() * Rv.transpose();
+    out.push_back(s);
+  }
+  return out;
+}
+
+void WriteTracks(const std::vector<TrackState>& tracks, const std::string& path) {
+  AtomicOutputFile out(path);
+  out.stream().precision(6);
+  out.stream() << std::fixed << "frame,t,track,x,z,vx,vz,sigma_x,sigma_z,age\n";
+  for (const TrackState& t : tracks) {
+    if (!t.confirmed) continue;
+    out.stream() << t.frame << "," << t.t_s << "," << t.id << "," << t.x_m << "," << t.z_m << "," << t.vx_mps << ","
+                 << t.vz_mps << "," << t.sigma_x_m << "," << t.sigma_z_m << "," << t.age << "\n";
+  }
+  out.Commit();
+}
+
+std::vector<TrackState> ReadTracks(const std::string& path) {
+  const CsvTable t = CsvTable::Read(path);
+  const int frame = t.Column("frame"), time = t.Column("t"), id = t.Column("track"), x = t.Column("x"),
+            z = t.Column("z"), vx = t.Column("vx"), vz = t.Column("vz"), sx = t.Column("sigma_x"),
+            sz = t.Column("sigma_z"), age = t.Column("age");
+  std::vector<TrackState> out;
+  for (size_t r = 0; r < t.rows(); ++r) {
+    TrackState s;
+    s.frame = static_cast<int>(t.Number(r, frame));
+    s.t_s = t.Number(r, time);
+    s.id = static_cast<int>(t.Number(r, id));
+    s.x_m = t.Number(r, x);
+    s.z_m = t.Number(r, z);
+    s.vx_mps = t.Number(r, vx);
+    s.vz_mps = t.Number(r, vz);
+    s.sigma_x_m = t.Number(r, sx);
+    s.sigma_z_m = t.Number(r, sz);
+    s.age = static_cast<int>(t.Number(r, age));
+    s.confirmed = true;
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace dps

@@ -1,0 +1,96 @@
+// Tests of the tracker: the Hungarian assignment on known answers, and tracks of synthetic
+// detections with known motion while the ego vehicle drives and turns: a parked object has zero
+// ground velocity, a moving one its true velocity, one id each, gating keeps two objects apart.
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "check.h"
+#include "dps/error.h"
+#include "dps/tracker.h"
+
+namespace {
+
+constexpr double kVelocityTolMps = 0.3;
+
+void TestHungarian() {
+  // The greedy choice (row 0 -> col 0, cost 1) is not optimal: 0 -> 1, 1 -> 0 costs 2 + 2 = 4 < 1 + 9.
+  std::vector<int> a = dps::HungarianAssignment({{1, 2}, {2, 9}}, 1e9);
+  CHECK_EQ(a[0], 1);
+  CHECK_EQ(a[1], 0);
+  // Rectangular, with forbidden pairs.
+  a = dps::HungarianAssignment({{5, 1e9, 3}, {1e9, 1e9, 1e9}}, 1e9);
+  CHECK_EQ(a[0], 2);
+  CHECK_EQ(a[1], -1);
+  a = dps::HungarianAssignment({{4}, {1}, {3}}, 1e9);
+  CHECK_EQ(a[0], -1);
+  CHECK_EQ(a[1], 0);
+  CHECK_EQ(a[2], -1);
+  CHECK(dps::HungarianAssignment({}, 1e9).empty());
+  dps::TrackerOptions bad;
+  bad.confirm_hits = 0;
+  CHECK_THROWS_WITH(dps::Tracker{bad}, dps::Error, "confirm_hits");
+}
+
+// The ego drives at 8 m/s turning at 0.1 rad/s; object A is parked at world (3, 20), object B
+// drives along world z at 12 m/s from (-3, 5). Detections are their positions in the current
+// vehicle frame with 0.15 m noise.
+void TestTracks() {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.15);
+  dps::Tracker tracker;
+  dps::PlanarPose ego;
+  const double dt = 1.0 / 15;
+  std::vector<int> ids_a, ids_b;
+  std::vector<double> err_a, err_b;
+  for (int f = 0; f < 60; ++f) {
+    const double t = f * dt;
+    if (f > 0) ego = dps::Compose(ego, dps::MotionProfile({{0, 8.0, 0.1}}).Integrate({}, 0, dt));
+    const Eigen::Vector2d a_world(3, 20), b_world(-3, 5 + 12 * t);
+    std::vector<dps::Detection> dets;
+    for (const Eigen::Vector2d& w : {a_world, b_world}) {
+      const Eigen::Vector2d v = dps::WorldToBody(ego, w);
+      dps::Detection d = dps::DetectionFromPoints({{v.x() + noise(rng), v.y() + noise(rng)}}, "front");
+      d.frame = f;
+      dets.push_back(d);
+    }
+    const std::vector<dps::TrackState> tracks = tracker.Update(f, t, ego, dets);
+    if (f < 20) continue;  // converged by then
+    const Eigen::Vector2d a_now = dps::WorldToBody(ego, a_world), b_now = dps::WorldToBody(ego, b_world);
+    const Eigen::Vector2d b_velocity = dps::WorldToBodyDirection(ego, {0, 12});
+    for (const dps::TrackState& s : tracks) {
+      if (!s.confirmed) continue;
+      if ((Eigen::Vector2d(s.x_m, s.z_m) - a_now).norm() < 1.0) {
+        ids_a.push_back(s.id);
+        err_a.push_back(std::hypot(s.vx_mps, s.vz_mps));  // parked: zero ground velocity
+      } else if ((Eigen::Vector2d(s.x_m, s.z_m) - b_now).norm() < 1.0) {
+        ids_b.push_back(s.id);
+        err_b.push_back((Eigen::Vector2d(s.vx_mps, s.vz_mps) - b_velocity).norm());
+        // The prediction 1 s ahead lands near where B will be (in the current vehicle frame).
+        CHECK((s.predicted - dps::WorldToBody(ego, b_world + Eigen::Vector2d(0, 12))).norm() < 1.0);
+      }
+    }
+  }
+  CHECK_EQ(ids_a.size(), size_t{40});
+  CHECK_EQ(ids_b.size(), size_t{40});
+  CHECK(std::all_of(ids_a.begin(), ids_a.end(), [&](int i) { return i == ids_a[0]; }));
+  CHECK(std::all_of(ids_b.begin(), ids_b.end(), [&](int i) { return i == ids_b[0]; }));
+  std::sort(err_a.begin(), err_a.end());
+  std::sort(err_b.begin(), err_b.end());
+  std::printf("tracks: parked object median |v| %.3f m/s, moving object median velocity error %.3f m/s\n",
+              err_a[err_a.size() / 2], err_b[err_b.size() / 2]);
+  CHECK(err_a[err_a.size() / 2] < kVelocityTolMps);
+  CHECK(err_b[err_b.size() / 2] < kVelocityTolMps);
+  // No detections: tracks die after max_misses frames.
+  std::vector<dps::TrackState> left;
+  for (int f = 60; f < 70; ++f) left = tracker.Update(f, f * dt, ego, {});
+  CHECK(left.empty());
+}
+
+}  // namespace
+
+int main() {
+  TestHungarian();
+  TestTracks();
+  return dps_test::Report();
+}
