@@ -12,12 +12,13 @@ T="$BUILD_DIR/tools"
 mkdir -p "$OUT"
 "$T/dps-synth" "$ROOT/data/scenes/$SCENE.yaml" --out "$OUT/drives/$SCENE" --force
 "$T/dps-process" "$OUT/drives/$SCENE" --out "$OUT/results" --force --map-png
-"$T/dps-eval" --detections "$OUT/results/$SCENE/detections.csv" --truth "$OUT/drives/$SCENE/truth.csv" \
+"$T/dps-eval" --detections "$OUT/results/$SCENE/detections.csv" --tracks "$OUT/results/$SCENE/tracks.csv" \
+  --truth "$OUT/drives/$SCENE/truth.csv" \
   --rig "$OUT/drives/$SCENE/rig.yaml" --json "$OUT/results/$SCENE/scores.json" | tee "$OUT/results/$SCENE/scores.txt"
 echo
 echo "Drive (synthetic, with truth):  $OUT/drives/$SCENE/"
 echo "Surround map video:             $OUT/results/$SCENE/map.avi   (frames: $OUT/results/$SCENE/map/)"
-echo "Detections:                     $OUT/results/$SCENE/detections.csv"
+echo "Detections / tracks:            $OUT/results/$SCENE/detections.csv, tracks.csv"
 head -n 4 "$OUT/results/$SCENE/detections.csv" | column -t -s, 2>/dev/null || head -n 4 "$OUT/results/$SCENE/detections.csv"
 echo "Scores (DESIGN.md §5):          $OUT/results/$SCENE/scores.txt, scores.json"
 echo "Other scenes: $0 overtaking | parked_cars | left_turn | truck_far | empty_road"
