@@ -69,20 +69,18 @@ struct LevelBuffers {
 
 struct SadStereoMatcher::Workspace {
   LevelBuffers levels[2];
-  cv::Mat left_grey, right_grey, left_half, right_half;
+  cv::Mat left_half, right_half;
 };
 
 namespace internal {
 
 const SadKernel& BestSadKernel() {
+#ifdef DPS_HAVE_AVX2_KERNEL
   // DPS_SIMD=baseline forces the baseline kernel (for comparisons and benchmarks).
   const char* force = std::getenv("DPS_SIMD");
-  const bool baseline_only = force && std::string(force) == "baseline";
-#ifdef DPS_HAVE_AVX2_KERNEL
   static const bool has_avx2 = cv::checkHardwareSupport(CV_CPU_AVX2);
-  if (has_avx2 && !baseline_only) return avx2::kKernel;
+  if (has_avx2 && !(force && std::string(force) == "baseline")) return avx2::kKernel;
 #endif
-  (void)baseline_only;
   return baseline::kKernel;
 }
 
