@@ -110,6 +110,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     Tracker tracker(o.tracker);
     std::vector<TrackState> tracks;
     PlanarPose ego;  // the vehicle in the tracker's world (its pose at frame 0)
+    OccupancyGrid grid(o.occupancy);
     cv::VideoWriter video;
     const std::string video_tmp = (tmp / ".map.tmp.avi").string();
     if (o.map_video) {
@@ -164,7 +165,11 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       char caption[128];
       std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
                     out.detections.size());
-      cv::Mat map = DrawSurroundMap(map_background, out.detections, o.map, caption);
+      grid.Update(ego, pipeline.coverage(), out.detections);
+      cv::Mat base = map_background.clone();
+      grid.Draw(base, o.map.range_m);
+      DrawOwnCar(base, rig.vehicle, o.map);
+      cv::Mat map = DrawSurroundMap(base, out.detections, o.map, caption);
       DrawTracks(map, frame_tracks, o.map);
       for (const TrackState& t : frame_tracks) {
         if (t.confirmed) tracks.push_back(t);

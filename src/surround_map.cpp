@@ -23,6 +23,12 @@ struct MapProjection {
 
 }  // namespace
 
+void DrawOwnCar(cv::Mat& map, const Vehicle& vehicle, const MapOptions& o) {
+  const MapProjection to_px(o);
+  cv::rectangle(map, to_px(-vehicle.width_m / 2, vehicle.length_m / 2), to_px(vehicle.width_m / 2, -vehicle.length_m / 2),
+                cv::Scalar(0, 0, 0), cv::FILLED);
+}
+
 cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& o) {
   const MapProjection to_px(o);
   const double scale = to_px.scale;
@@ -50,8 +56,7 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
     }
   }
   // The own car.
-  cv::rectangle(map, to_px(-vehicle.width_m / 2, vehicle.length_m / 2), to_px(vehicle.width_m / 2, -vehicle.length_m / 2),
-                cv::Scalar(0, 0, 0), cv::FILLED);
+  DrawOwnCar(map, vehicle, o);
   const cv::Point bar(12, o.size_px - 14);
   cv::line(map, bar, bar + cv::Point(cvRound(5 * scale), 0), cv::Scalar(0, 0, 0), 2);
   cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dps/drive_io.h"
+#include "dps/occupancy_grid.h"
 #include "dps/surround_map.h"
 #include "dps/surround_pipeline.h"
 #include "dps/tracker.h"
@@ -24,6 +25,7 @@ struct DriveOptions {
   bool diagnostics = false;       // diagnostics.avi: six panels per source (DrawDiagnostics)
   MapOptions map;
   TrackerOptions tracker;
+  OccupancyOptions occupancy;
   bool truncate = false;          // left and right with different frame counts: use the shorter
 };
 

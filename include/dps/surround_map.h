@@ -24,6 +24,10 @@ struct MapOptions {
 // What every frame's map shares: coverage shading, range rings, the own car, the scale bar.
 cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& options);
 
+// The own car (black) on a map picture; DrawMapBackground draws it too, this redraws it over
+// layers drawn later (the occupancy grid).
+void DrawOwnCar(cv::Mat& map, const Vehicle& vehicle, const MapOptions& options);
+
 // The map for one frame over a background from DrawMapBackground (same options). Obstacles are
 // drawn as their ground points joined in order and thickened by a closing in the picture (the
 // paper's morphological smoothing, erring towards the car).

@@ -1,0 +1,64 @@
+// Tests of the occupancy grid: a wall seen ahead becomes occupied at its range and free before
+// it, unknown behind it; it stays in place on the ground while the vehicle drives; after it is
+// gone, free evidence and decay clear it (no ghost).
+#include <cmath>
+
+#include "check.h"
+#include "dps/error.h"
+#include "dps/occupancy_grid.h"
+
+namespace {
+
+dps::Coverage FrontSector() {
+  dps::Coverage c;
+  c.sectors.push_back({"front", {0, 0.9}, 0.0, 50.0 * M_PI / 180.0});
+  return c;
+}
+
+// A wall across the front at world z = wall_z, as detection points in the vehicle frame.
+std::vector<dps::Detection> Wall(const dps::PlanarPose& ego, double wall_z) {
+  std::vector<Eigen::Vector2d> pts;
+  for (double x = -4; x <= 4; x += 0.05) pts.push_back(dps::WorldToBody(ego, {x, wall_z}));
+  return {dps::DetectionFromPoints(pts, "front")};
+}
+
+void TestWall() {
+  dps::OccupancyOptions o;
+  dps::OccupancyGrid grid(o);
+  dps::PlanarPose ego;
+  // The vehicle drives at 0.5 m per frame towards a wall at world z = 15 (ending 10.5 m from it,
+  // where the range sigma is 0.1 + 0.002 * 10.5^2 = 0.32 m).
+  for (int f = 0; f < 10; ++f) {
+    ego.z_m = f * 0.5;
+    grid.Update(ego, FrontSector(), Wall(ego, 15.0));
+  }
+  CHECK(grid.At({0.0, 15.05}) > o.strength_threshold);   // at the wall
+  CHECK(grid.At({2.0, 15.1}) > o.strength_threshold);
+  CHECK(grid.At({0.0, 11.0}) < 0);                       // free before it
+  CHECK(grid.At({0.0, 18.0}) == 0);                      // never seen behind it
+  CHECK(grid.AtVehicle({0.0, 15.05 - ego.z_m}) > o.strength_threshold);
+  // The obstacle cells lie within half a metre of the wall's surface (or its assumed thickness).
+  const std::vector<Eigen::Vector2d> cells = grid.ObstacleCells();
+  CHECK(!cells.empty());
+  for (const Eigen::Vector2d& c : cells) CHECK(c.y() >= 15.0 - 0.5 && c.y() <= 15.0 + o.thickness_m + 0.5);
+  // The wall is gone: free evidence and decay clear it.
+  for (int f = 0; f < 30; ++f) grid.Update(ego, FrontSector(), {});
+  CHECK(grid.At({0.0, 15.05}) <= 0);
+  CHECK(grid.ObstacleCells().empty());
+  // Driving far re-centres the grid; the old area falls off, the new one works.
+  for (int f = 0; f < 10; ++f) {
+    ego.z_m = 100 + f;
+    grid.Update(ego, FrontSector(), Wall(ego, 125.0));
+  }
+  CHECK(grid.At({0.0, 125.05}) > o.strength_threshold);
+  dps::OccupancyOptions bad;
+  bad.free_weight = 0.5;
+  CHECK_THROWS_WITH(dps::OccupancyGrid{bad}, dps::Error, "free_weight");
+}
+
+}  // namespace
+
+int main() {
+  TestWall();
+  return dps_test::Report();
+}
