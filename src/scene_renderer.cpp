@@ -249,7 +249,10 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
   if (obj.kind == "car" || obj.kind == "truck") {
     const double frac = h / obj.height_m;
     if (hit.face != 2 && h < 0.35) {
-      tone = 0.18 + 0.15 * detail;  // tyres and the shadow under the body
+      // Tyres and sills: darker than the body but with structure (tread, rims, dirt), as real
+      // wheels have; a featureless band would hide where the vehicle meets the road.
+      const double tread = Fbm(a, h, 0.05, 2, oseed + 313);
+      tone = 0.10 + 0.30 * detail + 0.35 * (tread - 0.5) * 2.0 * 0.5;
       base = cv::Vec3f::all(0.5f);
     } else if (hit.face != 2 && obj.kind == "car" && frac > 0.6 && frac < 0.92) {
       tone = 0.35 + 0.4 * detail;  // windows
