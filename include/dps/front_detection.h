@@ -44,7 +44,7 @@ struct FrontDetectorOptions {
   // drift_min_features corners is compensated by rebuilding the right view.
   int drift_interval = 30;
   double drift_min_px = 0.25;
-  int drift_min_features = 10;
+  int drift_min_features = 6;
   // Temporal consistency (the paper's variance check): pixels whose disparity varies over frames
   // by more than this variance are suppressed; 0 = off.
   double temporal_max_variance_px2 = 4.0;
