@@ -105,7 +105,8 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   try {
-    SurroundPipeline pipeline(rig, o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline);
+    const PipelineOptions pipeline_options = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
+    SurroundPipeline pipeline(rig, pipeline_options);
     std::vector<Detection> detections;
     Tracker tracker(o.tracker);
     std::vector<TrackState> tracks;
@@ -178,7 +179,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       map_s += Seconds(t2, t3);
       if (video.isOpened()) video.write(map);
       if (o.diagnostics) {
-        const PipelineOptions& po = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
+        const PipelineOptions& po = pipeline_options;
         const cv::Size panel(po.front.view_width, po.front.view_height);
         const double fd0 = po.front.stereo.min_disparity, fd1 = fd0 + po.front.stereo.num_disparities;
         const double sd0 = po.side.stereo.min_disparity, sd1 = sd0 + po.side.stereo.num_disparities;
