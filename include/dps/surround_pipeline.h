@@ -19,7 +19,7 @@ struct PipelineOptions {
   FrontDetectorOptions front;
   SideDetectorOptions side;
   bool sides = true;           // run motion stereo on the side views
-  double merge_distance_m = 1.0;  // detections this close are one object (FuseDetections)
+  double merge_distance_m = 1.5;  // detections this close are one object (FuseDetections)
 };
 
 // Options scaled to the rig's image size: at 640 px wide omni images, 400x200 views with a focal
