@@ -64,9 +64,14 @@ PlanarPose MotionProfile::Integrate(const PlanarPose& start, double t0, double t
   return p;
 }
 
+Eigen::Vector2d BodyToWorld(const PlanarPose& pose, const Eigen::Vector2d& b) {
+  const double c = std::cos(pose.heading_rad), s = std::sin(pose.heading_rad);
+  return {pose.x_m + c * b.x() + s * b.y(), pose.z_m - s * b.x() + c * b.y()};
+}
+
 PlanarPose Compose(const PlanarPose& a, const PlanarPose& b) {
-  const double c = std::cos(a.heading_rad), s = std::sin(a.heading_rad);
-  return {a.x_m + c * b.x_m + s * b.z_m, a.z_m - s * b.x_m + c * b.z_m, a.heading_rad + b.heading_rad};
+  const Eigen::Vector2d p = BodyToWorld(a, {b.x_m, b.z_m});
+  return {p.x(), p.y(), a.heading_rad + b.heading_rad};
 }
 
 Eigen::Vector2d WorldToBody(const PlanarPose& pose, const Eigen::Vector2d& w) {

@@ -15,11 +15,6 @@ void Require(bool ok, const char* field, double value, const char* constraint) {
   if (!ok) throw Error(Str("occupancy option ", field, " = ", value, ": violated constraint ", constraint));
 }
 
-Eigen::Vector2d ToWorld(const PlanarPose& p, const Eigen::Vector2d& v) {
-  const double c = std::cos(p.heading_rad), s = std::sin(p.heading_rad);
-  return {p.x_m + c * v.x() + s * v.y(), p.z_m - s * v.x() + c * v.y()};
-}
-
 }  // namespace
 
 void OccupancyOptions::Check() const {
@@ -64,7 +59,7 @@ double OccupancyGrid::At(const Eigen::Vector2d& w) const {
   return sum_.at<float>(r, c);
 }
 
-double OccupancyGrid::AtVehicle(const Eigen::Vector2d& v) const { return At(ToWorld(pose_, v)); }
+double OccupancyGrid::AtVehicle(const Eigen::Vector2d& v) const { return At(BodyToWorld(pose_, v)); }
 
 void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, const std::vector<Detection>& detections) {
   pose_ = pose;
@@ -73,7 +68,7 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
   // This frame's evidence per cell: occupied wins over free; each cell counts once per frame.
   cv::Mat delta(sum_.size(), CV_32F, cv::Scalar(0));
   auto add = [&](const Eigen::Vector2d& vehicle_point, double weight) {
-    const Eigen::Vector2d w = ToWorld(pose, vehicle_point);
+    const Eigen::Vector2d w = BodyToWorld(pose, vehicle_point);
     const int c = static_cast<int>(std::floor((w.x() - origin_.x()) / options_.cell_m));
     const int r = static_cast<int>(std::floor((w.y() - origin_.y()) / options_.cell_m));
     if (c < 0 || r < 0 || c >= options_.cells || r >= options_.cells) return;
@@ -130,10 +125,13 @@ std::vector<Eigen::Vector2d> OccupancyGrid::ObstacleCells() const {
 
 void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
   const double scale = map.cols / (2.0 * map_range_m);
+  // Map pixel -> vehicle -> world, with the pose's rotation taken once.
+  const double c = std::cos(pose_.heading_rad), s = std::sin(pose_.heading_rad);
   for (int v = 0; v < map.rows; ++v) {
+    const double vz = (map.rows / 2.0 - v) / scale;
     for (int u = 0; u < map.cols; ++u) {
-      const Eigen::Vector2d vehicle((u - map.cols / 2.0) / scale, (map.rows / 2.0 - v) / scale);
-      const double e = AtVehicle(vehicle);
+      const double vx = (u - map.cols / 2.0) / scale;
+      const double e = At({pose_.x_m + c * vx + s * vz, pose_.z_m - s * vx + c * vz});
       if (e == 0) continue;
       cv::Vec3b& px = map.at<cv::Vec3b>(v, u);
       const double a = std::min(1.0, std::abs(e) / options_.clamp);

@@ -185,8 +185,8 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
   best.point_vehicle = o + best_t * d;
   if (best.id == kIdGround) {
     // Paint or asphalt: decided in world coordinates.
-    const Eigen::Vector3d w = st.world_from_vehicle.Apply(best.point_vehicle);
-    const double x = w.x(), z = w.z();
+    best.point_world = st.world_from_vehicle.Apply(best.point_vehicle);
+    const double x = best.point_world.x(), z = best.point_world.z();
     bool paint = false;
     if (scene_.road.enabled) {
       const RoadMarkings& r = scene_.road;
@@ -224,7 +224,7 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
     }
     case kIdGround:
     case kIdPaint: {
-      const Eigen::Vector3d w = st.world_from_vehicle.Apply(hit.point_vehicle);
+      const Eigen::Vector3d& w = hit.point_world;
       const double n = Fbm(w.x(), w.z(), 0.8, 4, seed + 11);
       if (hit.id == kIdPaint) return cv::Vec3f::all(static_cast<float>(0.78 + 0.12 * n));
       // Asphalt: patches at 0.8 m, and aggregate at 0.25 m and 0.06 m that correlation stereo

@@ -18,7 +18,8 @@ void Require(bool ok, const char* field, double value, const char* constraint) {
   if (!ok) throw Error(Str("tracker option ", field, " = ", value, ": violated constraint ", constraint));
 }
 
-// Rotation taking vehicle (x, z) into the world for a planar pose (heading towards +X).
+// Rotation taking vehicle (x, z) directions into the world (for covariances; points and
+// velocities go through BodyToWorld / WorldToBody).
 Eigen::Matrix2d WorldFromVehicleRotation(const PlanarPose& p) {
   const double c = std::cos(p.heading_rad), s = std::sin(p.heading_rad);
   Eigen::Matrix2d R;
@@ -115,12 +116,10 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     ++t.age;
   }
   // Measurements in the world.
-  const Eigen::Matrix2d Rw = WorldFromVehicleRotation(ego);
-  const Eigen::Vector2d tw(ego.x_m, ego.z_m);
   std::vector<Eigen::Vector2d> z;
   std::vector<Eigen::Matrix2d> R;
   for (const Detection& d : detections) {
-    z.push_back(Rw * Eigen::Vector2d(d.x_m, d.z_m) + tw);
+    z.push_back(BodyToWorld(ego, {d.x_m, d.z_m}));
     const double s = options_.meas_sigma_m + options_.meas_sigma_per_m * d.range_m;
     R.push_back(Eigen::Matrix2d::Identity() * s * s);  // isotropic: the same in the world
   }
@@ -172,13 +171,13 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   }
   // Report in the current vehicle frame.
   std::vector<TrackState> out;
-  const Eigen::Matrix2d Rv = Rw.transpose();
+  const Eigen::Matrix2d Rv = WorldFromVehicleRotation(ego).transpose();
   for (const Track& t : tracks_) {
     TrackState s;
     s.frame = frame;
     s.t_s = t_s;
     s.id = t.id;
-    const Eigen::Vector2d p = Rv * (t.x.head<2>() - tw), v = Rv * t.x.tail<2>();
+    const Eigen::Vector2d p = WorldToBody(ego, t.x.head<2>()), v = WorldToBodyDirection(ego, t.x.tail<2>());
     const Eigen::Matrix2d cov = Rv * t.P.topLeftCorner<2, 2>() * Rv.transpose();
     s.x_m = p.x();
     s.z_m = p.y();
@@ -196,7 +195,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     Eigen::Matrix4d Ph = Fh * t.P * Fh.transpose();
     Ph(0, 0) += q * h * h * h * h / 4;
     Ph(1, 1) += q * h * h * h * h / 4;
-    s.predicted = Rv * (xh.head<2>() - tw);
+    s.predicted = WorldToBody(ego, xh.head<2>());
     s.predicted_cov = Rv * Ph.topLeftCorner<2, 2>() * Rv.transpose();
     out.push_back(s);
   }

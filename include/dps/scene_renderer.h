@@ -57,6 +57,7 @@ struct RayHit {
   double distance_m = 0.0;  // along the ray; 0 when nothing (sky) was hit
   std::uint16_t id = kIdSky;
   Eigen::Vector3d point_vehicle{0, 0, 0};
+  Eigen::Vector3d point_world{0, 0, 0};  // ground hits: the point in the world (texture coords)
   int box = -1;             // index into FrameState::boxes for objects
   int face = 0;             // objects: 0 side (along the length), 1 end, 2 top
   double face_a_m = 0.0;    // objects: coordinate along the face, metres
