@@ -1,5 +1,6 @@
 #include "dps/side_detection.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <opencv2/imgproc.hpp>
@@ -20,6 +21,70 @@ bool PixelToGround(const VirtualView& view, double x, double y, Eigen::Vector3d*
   return true;
 }
 
+// The bottom-most matched pixel of an object often sits above its contact with the road: the
+// lowest part of a vehicle (wheels, the shadow under it) is dark and untextured, so it has no
+// disparity, and near the contact the road's own disparity approaches the object's, so the score
+// fades. From `bottom` down, pixels with no disparity or with the object's disparity (within
+// `tolerance`) still belong to the object; the walk stops at the first pixel that shows something
+// else (the road at its own disparity), at an ignored pixel (own car, no source), or after
+// `max_gap` rows with no disparity. Returns the lowest object row (the row of the last pixel with
+// the object's disparity; a trailing run with no disparity is not taken).
+int ExtendToContact(const cv::Mat& disparity, const cv::Mat& ignore, int x, int bottom, float object_disparity,
+                    double tolerance, int max_gap) {
+  int lowest = bottom, gap = 0;
+  for (int y = bottom + 1; y < disparity.rows; ++y) {
+    if (ignore.at<std::uint8_t>(y, x)) break;
+    const float d = disparity.at<float>(y, x);
+    if (!std::isfinite(d)) {
+      if (++gap > max_gap) break;
+      continue;
+    }
+    if (std::abs(d - object_disparity) > tolerance) break;
+    lowest = y;
+    gap = 0;
+  }
+  return lowest;
+}
+
+// The depth of a vehicle-frame point along the view's axis.
+double ViewDepth(const VirtualView& view, const Eigen::Vector3d& p) {
+  return (view.spec().vehicle_from_view.transpose() * (p - view.viewpoint_vehicle())).z();
+}
+
+// One column of a component: where it meets the road (view pixel and ground point), its depth
+// along the view axis, its disparity and its height above the road.
+struct Contact {
+  int x = 0, y = 0;
+  Eigen::Vector2d ground{0, 0};
+  double depth = 0.0, disparity = 0.0, height = 0.0;
+};
+
+// A rigid object that moves parallel to the views (or stands still) has, in every column,
+// disparity = f * (its displacement relative to the camera) / depth: depth times disparity is
+// the same for all its columns. A column whose contact point breaks this (its bottom-most pixel
+// is not where the object meets the road, e.g. only the top of a face was matched) is dropped.
+// Components that hardly move relative to the camera (median |disparity| below
+// min_disparity) carry no such information and are kept as they are.
+std::vector<Contact> ConsistentContacts(std::vector<Contact> contacts, double min_disparity, double tolerance) {
+  if (contacts.size() < 3) return contacts;
+  std::vector<double> products, disparities;
+  for (const Contact& k : contacts) {
+    products.push_back(k.depth * k.disparity);
+    disparities.push_back(std::abs(k.disparity));
+  }
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  if (median(disparities) < min_disparity) return contacts;
+  const double m = median(products);
+  std::vector<Contact> kept;
+  for (const Contact& k : contacts) {
+    if (std::abs(k.depth * k.disparity - m) <= tolerance * std::abs(m)) kept.push_back(k);
+  }
+  return kept;
+}
+
 }  // namespace
 
 SideDetectorOptions::SideDetectorOptions() {
@@ -36,13 +101,30 @@ SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = true;
   options_.histogram.Check();
-  views_ = std::make_unique<SideViewCache>(camera_, side, options.view_width, options.view_height, options.focal_px);
   matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
 }
 
 SideDetector::~SideDetector() = default;
 
-const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view, long key) {
+int SideDetector::ScaleSixteenths(double baseline_m) const {
+  const double upper = options_.stereo.min_disparity + options_.stereo.num_disparities - 1;
+  const double scale = upper * options_.min_static_distance_m / (options_.focal_px * baseline_m);
+  const int lowest = static_cast<int>(std::ceil(16 * options_.min_view_scale));
+  return std::clamp(static_cast<int>(std::floor(16 * scale)), std::min(lowest, 16), 16);
+}
+
+SideViewCache& SideDetector::Views(int sixteenths) {
+  std::unique_ptr<SideViewCache>& views = views_[sixteenths];
+  if (!views) {
+    const double s = sixteenths / 16.0;
+    views = std::make_unique<SideViewCache>(camera_, side_, static_cast<int>(std::lround(options_.view_width * s)),
+                                            static_cast<int>(std::lround(options_.view_height * s)),
+                                            options_.focal_px * s, options_.horizon_fraction);
+  }
+  return *views;
+}
+
+const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view, std::pair<int, long> key) {
   const auto it = geometry_.find(key);
   if (it != geometry_.end()) return it->second;
   if (geometry_.size() > 64) geometry_.clear();  // a long turn through many yaws
@@ -55,7 +137,7 @@ const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view
     for (int x = 0; x < spec.width; ++x) {
       Eigen::Vector3d p;
       if (!PixelToGround(view, x, y, &p)) continue;
-      const double depth = (spec.vehicle_from_view.transpose() * (p - view.viewpoint_vehicle())).z();
+      const double depth = ViewDepth(view, p);
       if (depth > 0) g.inverse_depth.at<float>(y, x) = static_cast<float>(1.0 / depth);
     }
   }
@@ -79,22 +161,33 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   // the current one. SideViewSpec's yaw turns towards the front on either side.
   const double alpha = std::atan2(delta.x(), delta.z());
   const double sign = side_ == Side::kLeft ? 1.0 : -1.0;
-  const VirtualView& previous_view = views_->Get(sign * alpha);
+  const int sixteenths = ScaleSixteenths(r.baseline_m);
+  r.view_scale = sixteenths / 16.0;
+  SideViewCache& views = Views(sixteenths);
+  const VirtualView& previous_view = views.Get(sign * alpha);
   const cv::Mat previous = previous_view.Render(GreyImage(previous_omni));
-  const VirtualView& current_view = views_->Get(sign * (alpha - current_in_previous.heading_rad));
+  const VirtualView& current_view = views.Get(sign * (alpha - current_in_previous.heading_rad));
   const cv::Mat current = current_view.Render(GreyImage(current_omni));
-  // The camera moves along +x of a left view (static things move left in the image: the earlier
-  // image is the reference) and along -x of a right view (the later one is).
-  const bool previous_is_reference = side_ == Side::kLeft;
-  const VirtualView& reference = previous_is_reference ? previous_view : current_view;
-  r.reference_view = previous_is_reference ? previous : current;
-  r.other_view = previous_is_reference ? current : previous;
+  // The current frame is the reference, so that moving objects are placed where they are now.
+  // The camera moves along -x of a right view: static things move right from the previous to the
+  // current image, so current(x) matches previous(x - d) with d = f B / depth > 0, the matcher's
+  // convention. A left view moves along +x: mirrored left to right, the images follow the same
+  // convention, and the disparity is mirrored back.
+  const VirtualView& reference = current_view;
+  r.reference_view = current;
+  r.other_view = previous;
   const ViewSpec& spec = reference.spec();
-
-  const double reference_yaw = previous_is_reference ? sign * alpha : sign * (alpha - current_in_previous.heading_rad);
-  const ViewGeometry& geometry = Geometry(reference, views_->Key(reference_yaw));
+  const ViewGeometry& geometry =
+      Geometry(reference, {sixteenths, views.Key(sign * (alpha - current_in_previous.heading_rad))});
   const cv::Mat& ignore = geometry.ignore;
-  r.disparity = matcher_->Compute(r.reference_view, r.other_view);
+  if (side_ == Side::kLeft) {
+    cv::Mat current_mirrored, previous_mirrored;
+    cv::flip(current, current_mirrored, 1);
+    cv::flip(previous, previous_mirrored, 1);
+    cv::flip(matcher_->Compute(current_mirrored, previous_mirrored), r.disparity, 1);
+  } else {
+    r.disparity = matcher_->Compute(current, previous);
+  }
   r.disparity.setTo(kInvalidDisparity, ignore);
   // The road's disparity: f B / depth of the ground point along the view axis.
   cv::Mat road = geometry.inverse_depth * (spec.focal_px * r.baseline_m);
@@ -105,11 +198,9 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   r.histogram = ColumnHistogram(r.disparity, r.score, ho, &moments);
   const std::vector<HistogramComponent> components = FindComponents(r.histogram, ho, &labels, moments);
   r.obstacle = cv::Mat(spec.height, spec.width, CV_8U, cv::Scalar(0));
-  const Pose to_current = previous_is_reference ? rel.Inverse() : Pose();
   int id = 0;
   for (const HistogramComponent& c : components) {
-    std::vector<Eigen::Vector2d> points;
-    std::vector<double> heights;
+    std::vector<Contact> contacts;
     for (int x = c.x_begin; x < c.x_end; ++x) {
       // The component's pixels in this column; the bottom-most is the contact with the road.
       int bottom = -1, rows = 0;
@@ -122,17 +213,31 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
           ++rows;
         }
       }
+      const float disparity = c.column_disparity[x - c.x_begin];
       Eigen::Vector3d g;
-      if (bottom < 0 || !PixelToGround(reference, x, bottom, &g)) continue;
-      const double depth = (spec.vehicle_from_view.transpose() * (g - reference.viewpoint_vehicle())).z();
-      heights.push_back(rows * depth / spec.focal_px);
-      const Eigen::Vector3d p = to_current.Apply(g);
-      const Eigen::Vector2d ground(p.x(), p.z());
-      if (ground.norm() > options_.max_range_m) continue;
-      points.push_back(ground);
-      r.obstacle.at<std::uint8_t>(bottom, x) = 255;
+      if (bottom < 0 || !std::isfinite(disparity) || !PixelToGround(reference, x, bottom, &g)) continue;
+      const int lowest = ExtendToContact(r.disparity, ignore, x, bottom, disparity, options_.contact_tolerance_px,
+                                         static_cast<int>(options_.max_gap_below_m * spec.focal_px / ViewDepth(reference, g)));
+      if (lowest != bottom && !PixelToGround(reference, x, lowest, &g)) continue;
+      Contact k;
+      k.x = x;
+      k.y = lowest;
+      k.ground = Eigen::Vector2d(g.x(), g.z());
+      k.depth = ViewDepth(reference, g);
+      k.disparity = disparity;
+      k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
+      contacts.push_back(k);
     }
-    if (points.empty() || heights.empty()) continue;
+    contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
+    std::vector<Eigen::Vector2d> points;
+    std::vector<double> heights;
+    for (const Contact& k : contacts) {
+      heights.push_back(k.height);
+      if (k.ground.norm() > options_.max_range_m) continue;
+      points.push_back(k.ground);
+      r.obstacle.at<std::uint8_t>(k.y, k.x) = 255;
+    }
+    if (points.empty()) continue;
     std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
     if (heights[heights.size() / 2] < options_.min_obstacle_height_m) continue;
     Detection det = DetectionFromPoints(points, camera_.name);

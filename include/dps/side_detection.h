@@ -16,6 +16,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -33,12 +34,32 @@ struct SideDetectorOptions {
   int view_width = 400;        // side view size, px
   int view_height = 200;
   double focal_px = 170.0;
+  // The horizon's row as a fraction of the height: below it the view reaches 37 degrees down at
+  // the defaults, so a camera 0.9 m high sees where objects 1.2 m away meet the road.
+  double horizon_fraction = 0.35;
   StereoOptions stereo;        // default: 64 disparities from -16 (overtaking vehicles)
   HistogramOptions histogram;  // its range is the stereo range; scored two-sided
   double max_range_m = 40.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;
   double min_baseline_m = 0.05;       // camera displacement below this: no motion stereo
   double min_obstacle_height_m = 0.5; // components lower than this (median) are dropped
+  // Below the bottom-most matched pixel, pixels with no disparity (up to this height at the
+  // object's depth) or with the object's disparity (within the tolerance) still count as the
+  // object: the contact with the road is the lowest of them.
+  // At speed the camera moves far between frames, and a static object beside the car has the
+  // disparity f B / D (D: its distance from the camera across the view). To keep objects down to
+  // min_static_distance_m inside the disparity range, the views shrink (focal length and size
+  // together, so the field of view stays) by f B / D <= the range's upper end, in steps of 1/16
+  // and not below min_view_scale.
+  double min_static_distance_m = 1.0;
+  double min_view_scale = 0.5;
+  // Columns whose depth times disparity differs from the component's median by more than this
+  // fraction are dropped (see side_detection.cpp), unless the component's median |disparity| is
+  // below min_motion_disparity_px.
+  double motion_tolerance = 0.35;
+  double min_motion_disparity_px = 3.0;
+  double max_gap_below_m = 0.6;
+  double contact_tolerance_px = 1.5;
 
   SideDetectorOptions();
 };
@@ -50,6 +71,7 @@ struct SideResult {
   cv::Mat disparity, score, histogram;
   cv::Mat obstacle;            // CV_8U reference-view image, 255 at the bottom-most pixels
   double baseline_m = 0.0;
+  double view_scale = 1.0;     // the views' size and focal length relative to the options
   std::vector<Detection> detections;   // source = the camera's name
 };
 
@@ -75,9 +97,12 @@ class SideDetector {
   struct ViewGeometry {
     cv::Mat ignore, inverse_depth;
   };
-  const ViewGeometry& Geometry(const VirtualView& view, long key);
-  std::map<long, ViewGeometry> geometry_;
-  std::unique_ptr<SideViewCache> views_;
+  const ViewGeometry& Geometry(const VirtualView& view, std::pair<int, long> key);
+  // The view scale for a baseline, in sixteenths.
+  int ScaleSixteenths(double baseline_m) const;
+  SideViewCache& Views(int sixteenths);
+  std::map<std::pair<int, long>, ViewGeometry> geometry_;   // by (scale, yaw grid index)
+  std::map<int, std::unique_ptr<SideViewCache>> views_;     // by scale
   std::unique_ptr<SadStereoMatcher> matcher_;
 };
 
