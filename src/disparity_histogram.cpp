@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <opencv2/imgproc.hpp>
 
@@ -27,6 +28,10 @@ void HistogramOptions::Check() const {
   Require(threshold > 0, "threshold", threshold, "> 0");
   Require(min_columns >= 1, "min_columns", min_columns, ">= 1");
   Require(min_votes >= 0, "min_votes", min_votes, ">= 0");
+  Require(link_max_gap >= 0, "link_max_gap", link_max_gap, ">= 0");
+  Require(link_max_depth_ratio >= 1, "link_max_depth_ratio", link_max_depth_ratio, ">= 1");
+  Require(link_margin_px >= 0, "link_margin_px", link_margin_px, ">= 0");
+  Require(link_max_see_through >= 0, "link_max_see_through", link_max_see_through, ">= 0");
 }
 
 int HistogramOptions::bins() const {
@@ -134,6 +139,80 @@ std::vector<HistogramComponent> FindComponents(const cv::Mat& histogram, const H
   }
   if (labels_out) *labels_out = labels;
   return components;
+}
+
+namespace {
+
+// The first (or last) finite column disparity of a component; NaN if none.
+float EndDisparity(const HistogramComponent& c, bool last) {
+  const std::vector<float>& d = c.column_disparity;
+  for (size_t i = 0; i < d.size(); ++i) {
+    const float v = d[last ? d.size() - 1 - i : i];
+    if (std::isfinite(v)) return v;
+  }
+  return std::numeric_limits<float>::quiet_NaN();
+}
+
+// Pixels in columns [x0, x1) that see something farther than the line from (x0 - 1, d0) to
+// (x1, d1): valid disparity below the line's by the margin, on rows where the road lies beyond it.
+int SeeThrough(const cv::Mat& disparity, const cv::Mat& road, int x0, int x1, float d0, float d1,
+               const HistogramOptions& o) {
+  int count = 0;
+  for (int x = x0; x < x1; ++x) {
+    const double line = d0 + (d1 - d0) * (x - x0 + 1.0) / (x1 - x0 + 1.0);
+    const double farther = line - std::max(o.link_margin_px, 0.1 * line);
+    for (int y = 0; y < disparity.rows; ++y) {
+      const float v = disparity.at<float>(y, x), r = road.at<float>(y, x);
+      count += std::isfinite(v) && std::isfinite(r) && r < line && v < farther;
+    }
+  }
+  return count;
+}
+
+}  // namespace
+
+std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> cs, const cv::Mat& disparity,
+                                               const cv::Mat& road, const HistogramOptions& o, cv::Mat* labels,
+                                               const std::function<bool(int, float, int, float)>& allow) {
+  CV_Assert(disparity.type() == CV_32F && road.type() == CV_32F && disparity.size() == road.size());
+  o.Check();
+  if (o.link_max_gap == 0 || cs.size() < 2) return cs;
+  std::sort(cs.begin(), cs.end(), [](const HistogramComponent& a, const HistogramComponent& b) {
+    return a.x_begin < b.x_begin;
+  });
+  std::vector<HistogramComponent> out;
+  std::vector<bool> used(cs.size(), false);
+  for (size_t i = 0; i < cs.size(); ++i) {
+    if (used[i]) continue;
+    HistogramComponent a = cs[i];
+    used[i] = true;
+    // Grow to the right while the nearest disjoint neighbour within the gap qualifies.
+    for (bool grown = true; grown;) {
+      grown = false;
+      const float da = EndDisparity(a, true);
+      if (!std::isfinite(da) || da <= 0) break;
+      size_t best = cs.size();
+      for (size_t j = 0; j < cs.size(); ++j) {
+        if (used[j] || cs[j].x_begin < a.x_end || cs[j].x_begin - a.x_end > o.link_max_gap) continue;
+        if (best == cs.size() || cs[j].x_begin < cs[best].x_begin) best = j;
+      }
+      if (best == cs.size()) break;
+      const HistogramComponent& b = cs[best];
+      const float db = EndDisparity(b, false);
+      if (!std::isfinite(db) || db <= 0 || std::max(da, db) > o.link_max_depth_ratio * std::min(da, db)) break;
+      if (allow && !allow(a.x_end - 1, da, b.x_begin, db)) break;
+      if (SeeThrough(disparity, road, a.x_end, b.x_begin, da, db, o) > o.link_max_see_through) break;
+      a.column_disparity.resize(b.x_begin - a.x_begin, kInvalidDisparity);
+      a.column_disparity.insert(a.column_disparity.end(), b.column_disparity.begin(), b.column_disparity.end());
+      a.x_end = b.x_end;
+      a.votes += b.votes;
+      if (labels) labels->setTo(a.label, *labels == b.label);
+      used[best] = true;
+      grown = true;
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
 }
 
 }  // namespace dps

@@ -18,6 +18,7 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   options_.histogram.min_disparity = options.stereo.min_disparity;
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = false;
+  options_.histogram.link_max_gap = options.link_max_gap;
   options_.histogram.Check();
   const ViewSpec spec = FrontViewSpec(rig, "left", "right", options.view_width, options.view_height, options.focal_px);
   spec_ = spec;
@@ -89,8 +90,14 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
   r.score = ScoreImage(r.disparity, road_, options_.histogram, ramp_);
   cv::Mat moments, labels;
   r.histogram = ColumnHistogram(r.disparity, r.score, options_.histogram, &moments);
+  // Parts of one surface are linked when the gap between them on the ground is short.
+  const auto short_gap = [this](int x0, float d0, int x1, float d1) {
+    Eigen::Vector2d a, b;
+    return ColumnToGround(x0, d0, &a) && ColumnToGround(x1, d1, &b) && (a - b).norm() <= options_.link_max_gap_m;
+  };
   const std::vector<HistogramComponent> components =
-      FindComponents(r.histogram, options_.histogram, &labels, moments);
+      LinkComponents(FindComponents(r.histogram, options_.histogram, &labels, moments), r.disparity, road_,
+                     options_.histogram, &labels, short_gap);
   r.obstacle = cv::Mat(r.histogram.size(), CV_32F, cv::Scalar(0));
   int id = 0;
   const HistogramOptions& ho = options_.histogram;

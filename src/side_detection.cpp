@@ -119,7 +119,7 @@ SideViewCache& SideDetector::Views(int sixteenths) {
     const double s = sixteenths / 16.0;
     views = std::make_unique<SideViewCache>(camera_, side_, static_cast<int>(std::lround(options_.view_width * s)),
                                             static_cast<int>(std::lround(options_.view_height * s)),
-                                            options_.focal_px * s, options_.horizon_fraction);
+                                            options_.focal_px * s, kSideViewYawStepRad, 16, options_.horizon_fraction);
   }
   return *views;
 }

@@ -118,7 +118,7 @@ bool VirtualView::ProjectVehicle(const Eigen::Vector3d& p, Eigen::Vector2d* pixe
 }
 
 SideViewCache::SideViewCache(const RigCamera& camera, Side side, int width, int height,
-                             double focal_px, double horizon_fraction, double yaw_step_rad, size_t capacity)
+                             double focal_px, double yaw_step_rad, size_t capacity, double horizon_fraction)
     : camera_(camera), side_(side), width_(width), height_(height), focal_px_(focal_px),
       horizon_fraction_(horizon_fraction), step_(yaw_step_rad), capacity_(capacity) {
   if (!(yaw_step_rad > 0.0)) throw Error(Str("side view cache: yaw step ", yaw_step_rad, ": violated constraint > 0"));

@@ -66,6 +66,44 @@ void TestHistogram() {
   CHECK_THROWS_WITH(o.Check(), dps::Error, "bin_px");
 }
 
+// A slanted surface (disparity 20 falling to 11 across columns 10..100) over a road, with a
+// stretch of columns 50..64 where the surface has no texture: linked into one. The same stretch
+// showing the road beyond the surface (a real gap between two objects): not linked.
+void TestLinking() {
+  const int w = 120, h = 80;
+  cv::Mat road(h, w, CV_32F, cv::Scalar(dps::kInvalidDisparity));
+  for (int y = 21; y < h; ++y) road.row(y).setTo(0.5f * (y - 20));
+  for (const bool see_through : {false, true}) {
+    cv::Mat disp = road.clone();
+    for (int x = 10; x <= 100; ++x) {
+      const float d = 20.0f - 0.1f * (x - 10);
+      const bool gap = x >= 50 && x <= 64;
+      for (int y = 5; y < 20 + 2 * d; ++y) {  // down to where it meets the road
+        disp.at<float>(y, x) = gap ? (see_through ? road.at<float>(y, x) : dps::kInvalidDisparity) : d;
+      }
+    }
+    dps::HistogramOptions o;
+    o.max_disparity = 40;
+    o.link_max_gap = 20;
+    const cv::Mat score = dps::ScoreImage(disp, road, o);
+    cv::Mat moments, labels;
+    const cv::Mat hist = dps::ColumnHistogram(disp, score, o, &moments);
+    const std::vector<dps::HistogramComponent> parts = dps::FindComponents(hist, o, &labels, moments);
+    CHECK_EQ(parts.size(), size_t{2});
+    const std::vector<dps::HistogramComponent> linked = dps::LinkComponents(parts, disp, road, o, &labels);
+    CHECK_EQ(linked.size(), see_through ? size_t{2} : size_t{1});
+    if (linked.size() != 1) continue;
+    CHECK(linked[0].x_begin <= 12 && linked[0].x_end >= 99);
+    CHECK_NEAR(linked[0].column_disparity[80 - linked[0].x_begin], 13.0, 0.5);
+    CHECK(!std::isfinite(linked[0].column_disparity[57 - linked[0].x_begin]));  // the gap itself
+    const int gone = parts[0].label == linked[0].label ? parts[1].label : parts[0].label;
+    CHECK_EQ(cv::countNonZero(labels == gone), 0);  // relabelled
+    // A veto from the caller keeps them apart.
+    CHECK_EQ(dps::LinkComponents(parts, disp, road, o, nullptr, [](int, float, int, float) { return false; }).size(),
+             size_t{2});
+  }
+}
+
 void TestFrontProjection() {
   const dps::Rig rig = dps::ReadRig(kSource + "/data/rigs/omni_pair.yaml");
   dps::FrontDetectorOptions o;  // 400x200, f = 170
@@ -218,6 +256,7 @@ void TestDriftCorrection() {
 
 int main() {
   TestHistogram();
+  TestLinking();
   TestFrontProjection();
   TestFusion();
   TestEvaluation();

@@ -15,6 +15,7 @@
 // column per image column; disparities as in sad_stereo.h (kInvalidDisparity = none).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -33,6 +34,13 @@ struct HistogramOptions {
   double threshold = 4.0;          // votes a smoothed bin needs, > 0
   int min_columns = 3;             // narrower components are dropped, >= 1
   double min_votes = 30.0;         // components with fewer votes in all are dropped, >= 0
+  // Linking (LinkComponents): side-by-side components at most link_max_gap columns apart, whose
+  // depths differ by at most the factor link_max_depth_ratio, with at most link_max_see_through
+  // pixels in the gap that show something farther (by link_margin_px or 10 %). 0 = no linking.
+  int link_max_gap = 0;
+  double link_max_depth_ratio = 1.6;
+  double link_margin_px = 2.0;
+  int link_max_see_through = 5;
 
   // Throws dps::Error naming the field and the violated constraint.
   void Check() const;
@@ -70,6 +78,21 @@ struct HistogramComponent {
 // histogram size, 0 = background).
 std::vector<HistogramComponent> FindComponents(const cv::Mat& histogram, const HistogramOptions& options,
                                                cv::Mat* labels = nullptr, const cv::Mat& moments = cv::Mat());
+
+// One surface often falls apart into several components: a car's side seen at a grazing angle
+// has stretches without texture, and the histogram loses them. Two components side by side are
+// parts of one surface when, in the columns between them, nothing farther than the line joining
+// their ends is seen: a real gap between two objects shows the road or whatever lies behind it
+// (valid disparities smaller than the line's, on rows where the road lies beyond the line), an
+// untextured stretch of one surface shows nothing. `road` is the road's disparity as for
+// ScoreImage. Linked components become one (the left one's label; `labels`, when given, is
+// relabelled to match); options.link_max_gap = 0 returns the components unchanged.
+// `allow` (optional) gets the end column and disparity of the left part and the start column and
+// disparity of the right one and may veto the link (e.g. when the gap is too long on the ground).
+std::vector<HistogramComponent> LinkComponents(
+    std::vector<HistogramComponent> components, const cv::Mat& disparity, const cv::Mat& road,
+    const HistogramOptions& options, cv::Mat* labels = nullptr,
+    const std::function<bool(int x0, float d0, int x1, float d1)>& allow = nullptr);
 
 // The disparity of bin centre `row`.
 inline double BinDisparity(const HistogramOptions& o, double row) { return o.min_disparity + (row + 0.5) * o.bin_px; }

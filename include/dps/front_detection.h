@@ -34,6 +34,10 @@ struct FrontDetectorOptions {
   double focal_px = 170.0;     // front view focal length, px
   StereoOptions stereo = DetectionStereoOptions();  // its disparity range is the histogram's too
   HistogramOptions histogram;  // its disparity range is taken from `stereo`
+  // Parts of one surface up to this many columns and metres on the ground apart are linked
+  // (LinkComponents; link_max_gap = 0: never).
+  int link_max_gap = 60;
+  double link_max_gap_m = 6.0;
   double max_range_m = 60.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
   // Components whose pixels reach less than this above the road (median over columns) are flat

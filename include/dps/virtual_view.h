@@ -89,11 +89,15 @@ class VirtualView {
 
 // Side views of one camera for many yaws, built on demand and kept for the most recent
 // `capacity` quantised yaws (a steady turn reuses its tables frame after frame).
+constexpr double kSideViewYawStepRad = 0.25 * 3.14159265358979323846 / 180.0;  // 0.25 degrees
+
 class SideViewCache {
  public:
-  // yaw_step_rad > 0: yaws are rounded to multiples of it; capacity >= 1.
+  // yaw_step_rad > 0: yaws are rounded to multiples of it; capacity >= 1; horizon_fraction as
+  // for SideViewSpec.
   SideViewCache(const RigCamera& camera, Side side, int width, int height, double focal_px,
-                double horizon_fraction = 0.5, double yaw_step_rad = 0.25 * 3.14159265358979323846 / 180.0, size_t capacity = 16);
+                double yaw_step_rad = kSideViewYawStepRad, size_t capacity = 16,
+                double horizon_fraction = 0.5);
 
   // The view for the yaw nearest to yaw_rad on the quantisation grid.
   const VirtualView& Get(double yaw_rad);
