@@ -33,6 +33,7 @@ void TrackerOptions::Check() const {
   Require(accel_sigma_mps2 > 0, "accel_sigma_mps2", accel_sigma_mps2, "> 0");
   Require(meas_sigma_m > 0, "meas_sigma_m", meas_sigma_m, "> 0");
   Require(meas_sigma_per_m >= 0, "meas_sigma_per_m", meas_sigma_per_m, ">= 0");
+  Require(extent_sigma_fraction >= 0, "extent_sigma_fraction", extent_sigma_fraction, ">= 0");
   Require(init_speed_sigma_mps > 0, "init_speed_sigma_mps", init_speed_sigma_mps, "> 0");
   Require(gate_chi2 > 0, "gate_chi2", gate_chi2, "> 0");
   Require(confirm_hits >= 1, "confirm_hits", confirm_hits, ">= 1");
@@ -115,13 +116,23 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     t.P = F * t.P * F.transpose() + Q;
     ++t.age;
   }
-  // Measurements in the world.
+  // Measurements in the world. A detection's point nearest to the vehicle slides along the
+  // object as other parts come into view (passing a parked car, the nearest point moves with
+  // us), so along the detection's extent it is uncertain by up to half that extent.
   std::vector<Eigen::Vector2d> z;
   std::vector<Eigen::Matrix2d> R;
+  const Eigen::Matrix2d Rwv = WorldFromVehicleRotation(ego);
   for (const Detection& d : detections) {
     z.push_back(BodyToWorld(ego, {d.x_m, d.z_m}));
     const double s = options_.meas_sigma_m + options_.meas_sigma_per_m * d.range_m;
-    R.push_back(Eigen::Matrix2d::Identity() * s * s);  // isotropic: the same in the world
+    Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * s * s;
+    if (options_.extent_sigma_fraction > 0 && std::isfinite(d.x_max_m - d.x_min_m) && std::isfinite(d.z_max_m - d.z_min_m)) {
+      const double ex = options_.extent_sigma_fraction * (d.x_max_m - d.x_min_m);
+      const double ez = options_.extent_sigma_fraction * (d.z_max_m - d.z_min_m);
+      r(0, 0) += ex * ex;
+      r(1, 1) += ez * ez;
+    }
+    R.push_back(Rwv * r * Rwv.transpose());
   }
   // Gated Mahalanobis costs and the optimal assignment.
   const double forbidden = 1e12;
@@ -171,7 +182,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   }
   // Report in the current vehicle frame.
   std::vector<TrackState> out;
-  const Eigen::Matrix2d Rv = WorldFromVehicleRotation(ego).transpose();
+  const Eigen::Matrix2d Rv = Rwv.transpose();
   for (const Track& t : tracks_) {
     TrackState s;
     s.frame = frame;

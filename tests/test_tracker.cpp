@@ -1,11 +1,13 @@
 // Tests of the tracker: the Hungarian assignment on known answers, and tracks of synthetic
 // detections with known motion while the ego vehicle drives and turns: a parked object has zero
 // ground velocity, a moving one its true velocity, one id each, gating keeps two objects apart.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
 
 #include "check.h"
+#include "dps/detection.h"
 #include "dps/error.h"
 #include "dps/tracker.h"
 
@@ -89,8 +91,53 @@ void TestTracks() {
 
 }  // namespace
 
+// Passing a parked car at 8 m/s: the side view sees the stretch of its side within 1.5 m of the
+// camera's z, so the detection's nearest point (the end of that stretch nearest the origin) moves
+// with us while the car stands still. With the extent in the measurement noise the track's speed
+// stays near zero; treating the nearest point as exact follows the sliding point.
+double ParkedPassSpeed(double extent_sigma_fraction) {
+  dps::TrackerOptions o;
+  o.extent_sigma_fraction = extent_sigma_fraction;
+  dps::Tracker tracker(o);
+  const double dt = 1.0 / 15, speed = 8.0;
+  const double car_z0 = 2.0, car_z1 = 6.5, side_x = 2.5;  // world, the car's side facing us
+  std::vector<double> speeds;
+  for (int f = 0; f < 8; ++f) {
+    const double t = f * dt;
+    const dps::PlanarPose ego{0.0, speed * t, 0.0};
+    // The car's visible stretch in the vehicle frame: z in [-1.5, 1.5] of the camera at z 0.9;
+    // before the car comes alongside, its rear end faces the front view.
+    const double lo = std::max(car_z0 - ego.z_m, 0.9 - 1.5), hi = std::min(car_z1 - ego.z_m, 0.9 + 1.5);
+    std::vector<dps::Detection> dets;
+    if (lo < hi) {
+      const double near_z = std::clamp(0.0, lo, hi);
+      std::vector<Eigen::Vector2d> points;
+      for (double z = lo; z <= hi + 1e-9; z += 0.1) points.emplace_back(side_x, z);
+      points.emplace_back(side_x, near_z);
+      dps::Detection d = dps::DetectionFromPoints(points, "right");
+      dets.push_back(d);
+    }
+    for (const dps::TrackState& s : tracker.Update(f, t, ego, dets)) {
+      if (s.confirmed) speeds.push_back(std::hypot(s.vx_mps, s.vz_mps));
+    }
+  }
+  if (speeds.empty()) return 1e9;
+  std::sort(speeds.begin(), speeds.end());
+  return speeds[speeds.size() / 2];
+}
+
+void TestSlidingNearPoint() {
+  const double with_extent = ParkedPassSpeed(dps::TrackerOptions().extent_sigma_fraction);
+  const double point_only = ParkedPassSpeed(0.0);
+  std::printf("parked car passed at 8 m/s: median track speed %.3f m/s (extent in the noise), %.3f m/s (point only)\n",
+              with_extent, point_only);
+  // Less bias, not none: the sliding still pulls the track (docs/tracking.md).
+  CHECK(with_extent <= 0.7 * point_only);
+}
+
 int main() {
   TestHungarian();
   TestTracks();
+  TestSlidingNearPoint();
   return dps_test::Report();
 }

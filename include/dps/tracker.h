@@ -26,6 +26,9 @@ struct TrackerOptions {
   double accel_sigma_mps2 = 8.0;      // process noise, > 0
   double meas_sigma_m = 0.3;          // measurement sigma at range 0, > 0
   double meas_sigma_per_m = 0.04;     // ... growing by this per metre of range, >= 0
+  // ... and by this fraction of the detection's extent along x and z (its nearest point slides
+  // along the object as the visible part changes), >= 0.
+  double extent_sigma_fraction = 0.3;
   double init_speed_sigma_mps = 8.0;  // velocity uncertainty of a new track, > 0
   double gate_chi2 = 9.21;            // Mahalanobis gate (2 dof, 99 %), > 0
   int confirm_hits = 3;               // >= 1
