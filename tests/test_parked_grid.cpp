@@ -1,0 +1,109 @@
+// The occupancy grid of the parked-cars scene (issue: the cars' sides are occupied cells within
+// 0.5 m of truth, the road between is free): rendered frames through the whole pipeline (front
+// stereo, both side motion stereos) into the grid, with the ego motion of the scene. Checked at
+// the last frame against the truth footprints of that frame.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "check.h"
+#include "dps/occupancy_grid.h"
+#include "dps/scene_io.h"
+#include "dps/scene_renderer.h"
+#include "dps/surround_pipeline.h"
+#include "dps/synth.h"
+#include "dps/truth.h"
+
+namespace {
+
+const std::string kSource = DPS_SOURCE_DIR;
+constexpr double kNearTruthM = 0.5;       // occupied cells within this of a footprint
+constexpr double kOccupiedFraction = 0.9; // of the occupied cells near the cars
+constexpr double kSideCoverage = 0.7;     // of the points along the cars' sides seen so far
+constexpr double kFreeFraction = 0.9;     // of the cells of the lane ahead and beside
+
+void TestParkedCarsGrid() {
+  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
+  scene.render.supersample = 1;
+  const int frames = 30;  // 2 s at 8 m/s: car 1 passed, car 2 beside, cars 3-4 ahead
+  const dps::SceneRenderer renderer(scene);
+  size_t left = 0, right = 0;
+  for (size_t i = 0; i < scene.rig.cameras.size(); ++i) {
+    if (scene.rig.cameras[i].name == "left") left = i;
+    if (scene.rig.cameras[i].name == "right") right = i;
+  }
+  dps::SurroundPipeline pipeline(scene.rig, dps::DefaultPipelineOptions(scene.rig));
+  dps::OccupancyGrid grid;
+  dps::FrameState state;
+  for (int f = 0; f < frames; ++f) {
+    state = renderer.StateAt(scene.FrameTime(f));
+    dps::FrameInput in;
+    in.frame = f;
+    in.t_s = scene.FrameTime(f);
+    in.left = renderer.Render(state, left, f).image;
+    in.right = renderer.Render(state, right, f).image;
+    in.motion_known = f > 0;
+    if (f > 0) in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(f - 1), in.t_s);
+    const dps::FrameOutput out = pipeline.Process(in);
+    grid.Update(state.ego, pipeline.coverage(), out.detections);
+  }
+  const std::vector<dps::TruthRow> truth = dps::TruthAt(state, frames - 1);
+  const auto distance_to_cars = [&](const Eigen::Vector2d& p) {
+    double best = 1e9;
+    for (const dps::TruthRow& t : truth) best = std::min(best, dps::DistanceToFootprint(t, p));
+    return best;
+  };
+  // Occupied cells (vehicle frame now) within 20 m: near a car's footprint.
+  int occupied = 0, near_truth = 0;
+  for (const Eigen::Vector2d& w : grid.ObstacleCells()) {
+    const Eigen::Vector2d p = dps::WorldToBody(state.ego, w);
+    if (p.norm() > 20.0) continue;
+    ++occupied;
+    near_truth += distance_to_cars(p) <= kNearTruthM;
+  }
+  // The cars' sides facing the road (x = 2.5) from 2 m behind to 15 m ahead, wherever a car is:
+  // an occupied cell within 0.5 m of each point.
+  const std::vector<Eigen::Vector2d> cells = grid.ObstacleCells();
+  int side_points = 0, side_hits = 0;
+  for (double z = -2.0; z <= 15.0; z += 0.25) {
+    const Eigen::Vector2d p(2.5, z);
+    if (distance_to_cars(p) > 1e-9) continue;  // not on a car's side
+    ++side_points;
+    for (const Eigen::Vector2d& w : cells) {
+      if ((dps::WorldToBody(state.ego, w) - p).norm() <= kNearTruthM) {
+        ++side_hits;
+        break;
+      }
+    }
+  }
+  // The lane we drive in and the space up to the cars: x in [-1.5, 2.0], z in [3, 15] ahead,
+  // clear of every footprint by 0.5 m: free.
+  int lane = 0, free = 0, lane_occupied = 0;
+  for (double z = 3.0; z <= 15.0; z += 0.2) {
+    for (double x = -1.5; x <= 2.0; x += 0.2) {
+      const Eigen::Vector2d p(x, z);
+      if (distance_to_cars(p) < kNearTruthM) continue;
+      ++lane;
+      const double e = grid.AtVehicle(p);
+      free += e < 0;
+      lane_occupied += e > dps::OccupancyOptions().strength_threshold;
+    }
+  }
+  std::printf("parked cars grid after %d frames: %d occupied cells within 20 m, %d within %.1f m of a car; "
+              "car sides %d/%d points covered; lane %d/%d cells free, %d occupied\n",
+              frames, occupied, near_truth, kNearTruthM, side_hits, side_points, free, lane, lane_occupied);
+  CHECK(occupied > 0);
+  CHECK(near_truth >= kOccupiedFraction * occupied);
+  CHECK(side_points > 0);
+  CHECK(side_hits >= kSideCoverage * side_points);
+  CHECK(free >= kFreeFraction * lane);
+  CHECK_EQ(lane_occupied, 0);
+}
+
+}  // namespace
+
+int main() {
+  TestParkedCarsGrid();
+  return dps_test::Report();
+}
