@@ -1,9 +1,12 @@
 #include "dps/detection.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
-#include <map>
 #include <limits>
+#include <map>
+
+#include <opencv2/imgproc.hpp>
 
 #include "dps/atomic_file.h"
 #include "dps/csv.h"
@@ -34,20 +37,43 @@ Detection DetectionFromPoints(const std::vector<Eigen::Vector2d>& points, const 
   return d;
 }
 
+namespace {
+
+std::vector<Eigen::Vector2d> PointsOf(const Detection& d) {
+  return d.points.empty() ? std::vector<Eigen::Vector2d>{{d.x_m, d.z_m}} : d.points;
+}
+
+// One detection from two parts of the same frame: all points; the source of the part holding the
+// nearest point.
+Detection Merged(const Detection& a, const Detection& b) {
+  std::vector<Eigen::Vector2d> points = PointsOf(a);
+  const std::vector<Eigen::Vector2d> extra = PointsOf(b);
+  points.insert(points.end(), extra.begin(), extra.end());
+  Detection m = DetectionFromPoints(points, b.range_m < a.range_m ? b.source : a.source);
+  m.frame = a.frame;
+  m.t_s = a.t_s;
+  return m;
+}
+
+// Ids numbered per frame and source.
+void Renumber(std::vector<Detection>* d) {
+  std::map<std::pair<int, std::string>, int> next_id;
+  for (Detection& e : *d) e.id = next_id[{e.frame, e.source}]++;
+}
+
+}  // namespace
+
 std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double merge_distance_m) {
   const size_t n = in.size();
   std::vector<size_t> parent(n);
   for (size_t i = 0; i < n; ++i) parent[i] = i;
   std::function<size_t(size_t)> root = [&](size_t i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
-  auto points_of = [](const Detection& d) {
-    return d.points.empty() ? std::vector<Eigen::Vector2d>{{d.x_m, d.z_m}} : d.points;
-  };
   for (size_t i = 0; i < n; ++i) {
     for (size_t j = i + 1; j < n; ++j) {
       if (in[i].frame != in[j].frame) continue;
       bool close = false;
-      for (const Eigen::Vector2d& a : points_of(in[i])) {
-        for (const Eigen::Vector2d& b : points_of(in[j])) {
+      for (const Eigen::Vector2d& a : PointsOf(in[i])) {
+        for (const Eigen::Vector2d& b : PointsOf(in[j])) {
           if ((a - b).norm() <= merge_distance_m) {
             close = true;
             break;
@@ -65,23 +91,43 @@ std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double m
     if (slot[r] < 0) {
       slot[r] = static_cast<int>(out.size());
       out.push_back(in[i]);
-      out.back().points = points_of(in[i]);
+      out.back().points = PointsOf(in[i]);
       continue;
     }
-    Detection& m = out[slot[r]];
-    const std::vector<Eigen::Vector2d> extra = points_of(in[i]);
-    std::vector<Eigen::Vector2d> points = m.points;
-    points.insert(points.end(), extra.begin(), extra.end());
-    const std::string source = in[i].range_m < m.range_m ? in[i].source : m.source;
-    const int frame = m.frame;
-    const double t = m.t_s;
-    m = DetectionFromPoints(points, source);
-    m.frame = frame;
-    m.t_s = t;
+    out[slot[r]] = Merged(out[slot[r]], in[i]);
   }
-  std::map<std::pair<int, std::string>, int> next_id;
-  for (Detection& d : out) d.id = next_id[{d.frame, d.source}]++;
+  Renumber(&out);
   return out;
+}
+
+std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_length_m, double max_width_m,
+                                         bool across_sources_only) {
+  for (Detection& e : d) e.points = PointsOf(e);
+  for (;;) {
+    size_t bi = 0, bj = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < d.size(); ++i) {
+      for (size_t j = i + 1; j < d.size(); ++j) {
+        if (d[i].frame != d[j].frame || (across_sources_only && d[i].source == d[j].source)) continue;
+        std::vector<cv::Point2f> points;
+        for (const Detection* e : {&d[i], &d[j]}) {
+          for (const Eigen::Vector2d& p : e->points) points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+        }
+        const cv::RotatedRect box = cv::minAreaRect(points);
+        const double length = std::max(box.size.width, box.size.height), width = std::min(box.size.width, box.size.height);
+        if (length <= max_length_m && width <= max_width_m && length < best) {
+          best = length;
+          bi = i;
+          bj = j;
+        }
+      }
+    }
+    if (!std::isfinite(best)) break;
+    d[bi] = Merged(d[bi], d[bj]);
+    d.erase(d.begin() + static_cast<std::ptrdiff_t>(bj));
+  }
+  Renumber(&d);
+  return d;
 }
 
 void WriteDetections(const std::vector<Detection>& detections, const std::string& path) {

@@ -85,6 +85,10 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in) {
     d.t_s = in.t_s;
   }
   out.detections = FuseDetections(out.detections, options_.merge_distance_m);
+  if (options_.vehicle_length_m > 0) {
+    out.detections = MergeVehicleParts(std::move(out.detections), options_.vehicle_length_m,
+                                       options_.vehicle_width_m, options_.vehicle_across_sources_only);
+  }
   return out;
 }
 

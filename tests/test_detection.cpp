@@ -143,6 +143,31 @@ void TestFusion() {
     CHECK_EQ(d.frame, 3);
   }
   CHECK_EQ(merged, 1);
+  // Vehicle parts: a car's side seen by the right camera (x = 2.5, z -0.5..2) and its back seen by
+  // the front pair (z = 3.5, x 2.5..4.3) fit a 5 m x 2.2 m footprint together: one object. The
+  // side of the next car in the row (z 5..9.5) does not fit with either: kept apart.
+  auto line = [](double x0, double z0, double x1, double z1, const char* source) {
+    std::vector<Eigen::Vector2d> p;
+    for (int i = 0; i <= 10; ++i) p.emplace_back(x0 + (x1 - x0) * i / 10.0, z0 + (z1 - z0) * i / 10.0);
+    dps::Detection d = dps::DetectionFromPoints(p, source);
+    d.frame = 7;
+    return d;
+  };
+  const std::vector<dps::Detection> parts = {line(2.5, -0.5, 2.5, 2.0, "right"), line(2.5, 3.5, 4.3, 3.5, "front"),
+                                             line(2.5, 5.0, 2.5, 9.5, "front")};
+  const std::vector<dps::Detection> vehicles = dps::MergeVehicleParts(parts, 5.0, 2.2, false);
+  CHECK_EQ(vehicles.size(), size_t{2});
+  for (const dps::Detection& d : vehicles) {
+    if (d.n_points != 22) continue;
+    CHECK_EQ(d.source, std::string("right"));  // its nearest point (2.5, 0) is the side's
+    CHECK_NEAR(d.x_m, 2.5, 1e-12);
+    CHECK_NEAR(d.z_m, 0.0, 1e-12);
+    CHECK_NEAR(d.z_max_m, 3.5, 1e-12);
+  }
+  // Only across sources: the two front parts would not be tried together anyway; a shorter
+  // vehicle keeps the side and the back apart.
+  CHECK_EQ(dps::MergeVehicleParts(parts, 5.0, 2.2, true).size(), size_t{2});
+  CHECK_EQ(dps::MergeVehicleParts(parts, 3.5, 2.2, false).size(), size_t{3});
 }
 
 void TestEvaluation() {

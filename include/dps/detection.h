@@ -34,6 +34,14 @@ Detection DetectionFromPoints(const std::vector<Eigen::Vector2d>& points, const 
 // the source of the part holding the nearest point; ids are renumbered per source.
 std::vector<Detection> FuseDetections(const std::vector<Detection>& detections, double merge_distance_m);
 
+// Merges parts of one frame that together fit into one vehicle's footprint (the smallest rotated
+// rectangle around their points no longer than max_length_m and no wider than max_width_m),
+// smallest union first, until no pair fits: a car seen partly by a side camera and partly by the
+// front pair, with the stretch between unseen. `across_sources_only`: only parts from different
+// sources. Ids are renumbered per source.
+std::vector<Detection> MergeVehicleParts(std::vector<Detection> detections, double max_length_m, double max_width_m,
+                                         bool across_sources_only);
+
 // detections.csv: header and one row per detection, written atomically. Throws dps::Error.
 void WriteDetections(const std::vector<Detection>& detections, const std::string& path);
 // Reads detections.csv (columns by name, extra columns ignored). Throws dps::Error naming the
