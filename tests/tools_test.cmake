@@ -37,6 +37,22 @@ if(NOT EXISTS "${WORK}/calibrated.yaml")
   message(FATAL_ERROR "dps-calibrate wrote no ${WORK}/calibrated.yaml")
 endif()
 
+# Automatic marks from the rendered images: marks file, drawings and a calibrated rig.
+expect(0 "painted lines found" "${TOOLS}/dps-calibrate" --rig "${WORK}/calib/rig.yaml"
+       --images "left=${WORK}/calib/left/000000.png,right=${WORK}/calib/right/000000.png"
+       --write-marks "${WORK}/auto_marks.csv" --draw "${WORK}/auto_draw" --out "${WORK}/auto_calibrated.yaml")
+foreach(f auto_marks.csv auto_draw/left_marks.png auto_draw/right_marks.png auto_calibrated.yaml)
+  if(NOT EXISTS "${WORK}/${f}")
+    message(FATAL_ERROR "dps-calibrate --images wrote no ${WORK}/${f}")
+  endif()
+endforeach()
+expect(nonzero "expected CAMERA=IMAGE" "${TOOLS}/dps-calibrate" --rig "${WORK}/calib/rig.yaml"
+       --images "${WORK}/calib/left/000000.png" --out "${WORK}/x.yaml")
+expect(nonzero "nothing.png: cannot read the image" "${TOOLS}/dps-calibrate" --rig "${WORK}/calib/rig.yaml"
+       --images "left=${WORK}/nothing.png" --out "${WORK}/x.yaml")
+expect(nonzero "either --marks or --images" "${TOOLS}/dps-calibrate" --rig "${WORK}/calib/rig.yaml"
+       --out "${WORK}/x.yaml")
+
 file(WRITE "${WORK}/bad_marks.csv" "camera,line,u,v\nleft,1,10,10\n")
 expect(nonzero "bad_marks.csv: missing column 'axis'" "${TOOLS}/dps-calibrate" --rig "${WORK}/calib/rig.yaml"
        --marks "${WORK}/bad_marks.csv" --out "${WORK}/x.yaml")
