@@ -64,9 +64,15 @@ PlanarPose MotionProfile::Integrate(const PlanarPose& start, double t0, double t
   return p;
 }
 
-Eigen::Vector2d BodyToWorld(const PlanarPose& pose, const Eigen::Vector2d& b) {
+Eigen::Matrix2d BodyToWorldRotation(const PlanarPose& pose) {
   const double c = std::cos(pose.heading_rad), s = std::sin(pose.heading_rad);
-  return {pose.x_m + c * b.x() + s * b.y(), pose.z_m - s * b.x() + c * b.y()};
+  Eigen::Matrix2d R;
+  R << c, s, -s, c;
+  return R;
+}
+
+Eigen::Vector2d BodyToWorld(const PlanarPose& pose, const Eigen::Vector2d& b) {
+  return Eigen::Vector2d(pose.x_m, pose.z_m) + BodyToWorldRotation(pose) * b;
 }
 
 PlanarPose Compose(const PlanarPose& a, const PlanarPose& b) {

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "dps/error.h"
 
 namespace dps {
@@ -66,15 +69,23 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
   Recentre({pose.x_m, pose.z_m});
   sum_ *= options_.decay;
   // This frame's evidence per cell: occupied wins over free; each cell counts once per frame.
+  // The free part of every sector is one fan polygon (the apex and each bearing's free end),
+  // filled at once; the occupied evidence is walked along the bearings that hit something.
   cv::Mat delta(sum_.size(), CV_32F, cv::Scalar(0));
-  auto add = [&](const Eigen::Vector2d& vehicle_point, double weight) {
-    const Eigen::Vector2d w = BodyToWorld(pose, vehicle_point);
-    const int c = static_cast<int>(std::floor((w.x() - origin_.x()) / options_.cell_m));
-    const int r = static_cast<int>(std::floor((w.y() - origin_.y()) / options_.cell_m));
-    if (c < 0 || r < 0 || c >= options_.cells || r >= options_.cells) return;
-    float& d = delta.at<float>(r, c);
-    if (weight > 0) d = std::max(d, static_cast<float>(weight));
-    else if (d <= 0) d = std::min(d, static_cast<float>(weight));
+  cv::Mat free(sum_.size(), CV_8U, cv::Scalar(0));
+  const Eigen::Matrix2d rotation = BodyToWorldRotation(pose);  // one transform per bearing
+  const auto cell_of = [&](const Eigen::Vector2d& w) { return Eigen::Vector2d((w - origin_) / options_.cell_m); };
+  constexpr int kShift = 4;  // fillPoly's fractional bits
+  const auto vertex = [&](const Eigen::Vector2d& w) {
+    const Eigen::Vector2d c = (cell_of(w) - Eigen::Vector2d::Constant(0.5)) * (1 << kShift);  // cell centres
+    return cv::Point(static_cast<int>(std::lround(c.x())), static_cast<int>(std::lround(c.y())));
+  };
+  const auto occupy = [&](const Eigen::Vector2d& w, double weight) {
+    const Eigen::Vector2d c = cell_of(w);
+    const int col = static_cast<int>(std::floor(c.x())), row = static_cast<int>(std::floor(c.y()));
+    if (col < 0 || row < 0 || col >= options_.cells || row >= options_.cells) return;
+    float& d = delta.at<float>(row, col);
+    d = std::max(d, static_cast<float>(weight));
   };
   const double step_rad = options_.bearing_step_deg * kPi / 180;
   const double walk = options_.cell_m / 2;
@@ -91,21 +102,27 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
         nearest[b] = std::min(nearest[b], rel.norm());
       }
     }
+    const Eigen::Vector2d apex = BodyToWorld(pose, s.apex);
+    std::vector<cv::Point> fan{vertex(apex)};
     for (int b = 0; b < bins; ++b) {
       const double angle = s.direction_rad - s.half_angle_rad + (b + 0.5) * step_rad;
-      const Eigen::Vector2d dir(std::sin(angle), std::cos(angle));
+      const Eigen::Vector2d dir = rotation * Eigen::Vector2d(std::sin(angle), std::cos(angle));
       const double r = nearest[b];
       const double sigma = std::isfinite(r) ? options_.sigma0_m + options_.sigma_per_m2 * r * r : 0.0;
       const double free_end = std::isfinite(r) ? std::max(0.0, r - 2 * sigma) : options_.free_range_m;
-      for (double t = walk; t < std::min(free_end, options_.free_range_m); t += walk) add(s.apex + t * dir, options_.free_weight);
+      fan.push_back(vertex(apex + std::min(free_end, options_.free_range_m) * dir));
       if (!std::isfinite(r)) continue;
       for (double t = std::max(walk, r - 2 * sigma); t <= r + options_.thickness_m; t += walk) {
         const double w = t < r ? options_.occupied_weight * std::exp(-0.5 * std::pow((t - r) / sigma, 2))
                                : options_.occupied_weight;
-        add(s.apex + t * dir, w);
+        occupy(apex + t * dir, w);
       }
     }
+    cv::fillPoly(free, std::vector<std::vector<cv::Point>>{fan}, cv::Scalar(255), cv::LINE_8, kShift);
   }
+  cv::Mat unoccupied = delta <= 0;
+  cv::bitwise_and(free, unoccupied, free);
+  delta.setTo(options_.free_weight, free);
   sum_ += delta;
   cv::min(sum_, options_.clamp, sum_);
   cv::max(sum_, -options_.clamp, sum_);
@@ -124,21 +141,41 @@ std::vector<Eigen::Vector2d> OccupancyGrid::ObstacleCells() const {
 }
 
 void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
+  CV_Assert(map.type() == CV_8UC3);
+  // Map pixel (u, v) -> vehicle (vx, vz) -> world -> grid cell (column, row): one affine map, so
+  // the grid is resampled with warpAffine (nearest cell) instead of a lookup per pixel.
   const double scale = map.cols / (2.0 * map_range_m);
-  // Map pixel -> vehicle -> world, with the pose's rotation taken once.
   const double c = std::cos(pose_.heading_rad), s = std::sin(pose_.heading_rad);
-  for (int v = 0; v < map.rows; ++v) {
-    const double vz = (map.rows / 2.0 - v) / scale;
-    for (int u = 0; u < map.cols; ++u) {
-      const double vx = (u - map.cols / 2.0) / scale;
-      const double e = At({pose_.x_m + c * vx + s * vz, pose_.z_m - s * vx + c * vz});
-      if (e == 0) continue;
-      cv::Vec3b& px = map.at<cv::Vec3b>(v, u);
-      const double a = std::min(1.0, std::abs(e) / options_.clamp);
-      const cv::Vec3b target = e > 0 ? cv::Vec3b(90, 90, 90) : cv::Vec3b(215, 240, 215);
-      for (int k = 0; k < 3; ++k) px[k] = cv::saturate_cast<std::uint8_t>(px[k] + a * (target[k] - px[k]));
+  const double k = 1.0 / (scale * options_.cell_m);
+  // vx = (u - W/2) / scale, vz = (H/2 - v) / scale; world x = px + c vx + s vz, z = pz - s vx + c vz;
+  // column = (x - ox) / cell - 0.5 (nearest-neighbour sampling rounds), row likewise.
+  const double u0 = map.cols / 2.0, v0 = map.rows / 2.0;
+  const double bx = (pose_.x_m - origin_.x()) / options_.cell_m - 0.5, bz = (pose_.z_m - origin_.y()) / options_.cell_m - 0.5;
+  const cv::Matx23d M(c * k, -s * k, bx - c * k * u0 + s * k * v0,
+                      -s * k, -c * k, bz + s * k * u0 + c * k * v0);
+  // The evidence as 8 bits (128 = unknown, 1 / 255 = clamped free / occupied) resamples fast.
+  cv::Mat quantised, level;
+  sum_.convertTo(quantised, CV_8U, 127.0 / options_.clamp, 128.0);
+  cv::warpAffine(quantised, level, M, map.size(), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT,
+                 cv::Scalar(128));
+  // Blend towards grey (occupied) or light green (free) by |evidence| / clamp, in 1/256 steps.
+  int weight[256];
+  for (int q = 0; q < 256; ++q) weight[q] = std::min(256, std::abs(q - 128) * 256 / 127);
+  cv::parallel_for_(cv::Range(0, map.rows), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const std::uint8_t* e = level.ptr<std::uint8_t>(v);
+      std::uint8_t* px = map.ptr<std::uint8_t>(v);
+      for (int u = 0; u < map.cols; ++u, px += 3) {
+        if (e[u] == 128) continue;
+        const int a = weight[e[u]];
+        const bool occupied = e[u] > 128;
+        const int t0 = occupied ? 90 : 215, t1 = occupied ? 90 : 240, t2 = occupied ? 90 : 215;
+        px[0] = static_cast<std::uint8_t>(px[0] + (((t0 - px[0]) * a) >> 8));
+        px[1] = static_cast<std::uint8_t>(px[1] + (((t1 - px[1]) * a) >> 8));
+        px[2] = static_cast<std::uint8_t>(px[2] + (((t2 - px[2]) * a) >> 8));
+      }
     }
-  }
+  });
 }
 
 }  // namespace dps

@@ -68,18 +68,25 @@ cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>&
   const MapProjection to_px(o);
   const double scale = to_px.scale;
   cv::Mat map = background.clone();
-  // Obstacles: ground points joined, closed in the picture.
-  cv::Mat mask(map.size(), CV_8U, cv::Scalar(0));
+  // Obstacles: ground points joined, closed in the picture (each within its own bounding box).
+  const int close = cvRound(scale) | 1;
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(close, close));
+  const cv::Rect picture(0, 0, map.cols, map.rows);
   for (const Detection& d : detections) {
     std::vector<cv::Point> pts;
     for (const Eigen::Vector2d& p : d.points) pts.push_back(to_px(p.x(), p.y()));
     if (pts.empty()) pts.push_back(to_px(d.x_m, d.z_m));
+    const int pad = 2 * close + std::max(2, cvRound(0.25 * scale));
+    const cv::Rect box = cv::Rect(cv::boundingRect(pts).tl() - cv::Point(pad, pad),
+                                  cv::boundingRect(pts).br() + cv::Point(pad, pad)) & picture;
+    if (box.empty()) continue;
+    cv::Mat mask(box.size(), CV_8U, cv::Scalar(0));
+    for (cv::Point& p : pts) p -= box.tl();
     cv::polylines(mask, pts, false, cv::Scalar(255), std::max(2, cvRound(0.25 * scale)));
     for (const cv::Point& p : pts) cv::circle(mask, p, std::max(1, cvRound(0.15 * scale)), cv::Scalar(255), cv::FILLED);
+    cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);
+    map(box).setTo(cv::Scalar(0, 0, 220), mask);
   }
-  cv::morphologyEx(mask, mask, cv::MORPH_CLOSE,
-                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(cvRound(scale) | 1, cvRound(scale) | 1)));
-  map.setTo(cv::Scalar(0, 0, 220), mask);
   for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, cv::Scalar(0, 0, 120), cv::FILLED, cv::LINE_AA);
   cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return map;

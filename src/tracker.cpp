@@ -18,15 +18,6 @@ void Require(bool ok, const char* field, double value, const char* constraint) {
   if (!ok) throw Error(Str("tracker option ", field, " = ", value, ": violated constraint ", constraint));
 }
 
-// Rotation taking vehicle (x, z) directions into the world (for covariances; points and
-// velocities go through BodyToWorld / WorldToBody).
-Eigen::Matrix2d WorldFromVehicleRotation(const PlanarPose& p) {
-  const double c = std::cos(p.heading_rad), s = std::sin(p.heading_rad);
-  Eigen::Matrix2d R;
-  R << c, s, -s, c;
-  return R;
-}
-
 }  // namespace
 
 void TrackerOptions::Check() const {
@@ -121,7 +112,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   // us), so along the detection's extent it is uncertain by up to half that extent.
   std::vector<Eigen::Vector2d> z;
   std::vector<Eigen::Matrix2d> R;
-  const Eigen::Matrix2d Rwv = WorldFromVehicleRotation(ego);
+  const Eigen::Matrix2d Rwv = BodyToWorldRotation(ego);
   for (const Detection& d : detections) {
     z.push_back(BodyToWorld(ego, {d.x_m, d.z_m}));
     const double s = options_.meas_sigma_m + options_.meas_sigma_per_m * d.range_m;

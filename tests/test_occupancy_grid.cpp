@@ -2,6 +2,7 @@
 // it, unknown behind it; it stays in place on the ground while the vehicle drives; after it is
 // gone, free evidence and decay clear it (no ghost).
 #include <cmath>
+#include <cstdio>
 
 #include "check.h"
 #include "dps/error.h"
@@ -56,9 +57,40 @@ void TestWall() {
   CHECK_THROWS_WITH(dps::OccupancyGrid{bad}, dps::Error, "free_weight");
 }
 
+// The drawing: a turned vehicle in front of a wall; every map pixel that shows the grid must show
+// the cell under it, found the long way (map pixel -> vehicle -> world -> At). Pixels on cell
+// borders may land in the neighbouring cell.
+void TestDraw() {
+  dps::OccupancyGrid grid;
+  dps::PlanarPose ego{1.3, 2.1, 0.4};
+  for (int f = 0; f < 6; ++f) grid.Update(ego, FrontSector(), Wall(ego, 12.0));
+  const double range = 20.0;
+  cv::Mat map(300, 300, CV_8UC3, cv::Scalar(255, 255, 255));
+  grid.Draw(map, range);
+  const double scale = map.cols / (2 * range);
+  int occupied = 0, free = 0, agree = 0, shown = 0;
+  for (int v = 0; v < map.rows; ++v) {
+    for (int u = 0; u < map.cols; ++u) {
+      const double e = grid.AtVehicle({(u - map.cols / 2.0) / scale, (map.rows / 2.0 - v) / scale});
+      const cv::Vec3b px = map.at<cv::Vec3b>(v, u);
+      const bool grey = px[0] == px[1] && px[1] == px[2] && px[0] < 255;
+      const bool green = px[1] > px[0];
+      occupied += e > 0;
+      free += e < 0;
+      shown += e != 0;
+      agree += (e > 0 && grey) || (e < 0 && green) || (e == 0 && px == cv::Vec3b(255, 255, 255));
+    }
+  }
+  std::printf("grid drawing: %d occupied and %d free pixels expected; %d of %d pixels agree\n", occupied, free, agree,
+              map.rows * map.cols);
+  CHECK(occupied > 100 && free > 1000 && shown > 0);
+  CHECK(agree >= 0.99 * map.rows * map.cols);
+}
+
 }  // namespace
 
 int main() {
   TestWall();
+  TestDraw();
   return dps_test::Report();
 }

@@ -58,6 +58,8 @@ class MotionProfile {
 // The pose `b`, given in the body frame of `a`, in the frame `a` is given in: a * b.
 PlanarPose Compose(const PlanarPose& a, const PlanarPose& b);
 
+// The rotation taking body (x, z) directions into the world: BodyToWorld without the shift.
+Eigen::Matrix2d BodyToWorldRotation(const PlanarPose& pose);
 // Expresses a point of the body frame of `pose` in the world (the inverse of WorldToBody).
 Eigen::Vector2d BodyToWorld(const PlanarPose& pose, const Eigen::Vector2d& body_xz);
 // Expresses a world point in the body frame of `pose` (ground plane, x right, z forward).
