@@ -1,6 +1,8 @@
 // dps-bench: times dps's stereo matcher against cv::StereoBM on the same pairs in the same run
-// (same disparity range and block size), with and without the left-right check, and the virtual
-// view rectification. Prints a Markdown table for docs/performance.md.
+// (same disparity range and block size), with and without the left-right check, the virtual
+// view rectification, and the whole per-frame pipeline (what dps-process does between decoding
+// the images and encoding the map) against one StereoBM call at the same omni size. Prints
+// Markdown tables for docs/performance.md.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -16,8 +18,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "dps/occupancy_grid.h"
 #include "dps/rig_io.h"
 #include "dps/sad_stereo.h"
+#include "dps/scene_io.h"
+#include "dps/scene_renderer.h"
+#include "dps/surround_map.h"
+#include "dps/surround_pipeline.h"
+#include "dps/tracker.h"
 #include "dps/virtual_view.h"
 
 namespace {
@@ -47,8 +55,9 @@ std::pair<double, double> MedianMs(int runs, const std::function<void()>& a, con
 int main(int argc, char** argv) {
   const std::string data = argc > 1 ? argv[1] : "data/real";
   if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
-    std::printf("usage: dps-bench [DATA_DIR [RIG]]   (DATA_DIR holds kitti_pair/, default data/real;\n"
-                "       RIG for the view timing, default data/rigs/omni_pair.yaml; run from the source)\n");
+    std::printf("usage: dps-bench [DATA_DIR [RIG [SCENE]]]   (DATA_DIR holds kitti_pair/, default data/real;\n"
+                "       RIG for the view timing, default data/rigs/omni_pair.yaml; SCENE for the pipeline,\n"
+                "       default data/scenes/lead_car.yaml; run from the source)\n");
     return 0;
   }
   const cv::Mat left = cv::imread(data + "/kitti_pair/imgKittyl.bmp", cv::IMREAD_GRAYSCALE);
@@ -104,6 +113,73 @@ int main(int argc, char** argv) {
           [&] { view->Render(omni, out); });
       std::printf("| %dx%d | %s | %dx%d | %.3f | %.2f |\n", ow, oh, v.name, vw, vh, remap_ms, build_ms);
     }
+  }
+
+  // The whole pipeline per frame: lead_car rendered at each omni size (20 frames, run once to warm
+  // up and once timed), front stereo, both side motion stereos, histograms, fusion, tracking, the
+  // occupancy grid and the map picture; each frame interleaved with one cv::StereoBM call (D 64,
+  // block 9) on the KITTI pair resized to the omni size.
+  const std::string scene_path = argc > 3 ? argv[3] : "data/scenes/lead_car.yaml";
+  std::printf("\n| omni size | views | front ms | sides ms | map ms | frame ms | frames/s | StereoBM ms | frame / BM |\n"
+              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (const auto [ow, oh] : {std::pair{320, 240}, std::pair{640, 480}, std::pair{1024, 1024}}) {
+    dps::Scene scene = dps::ReadScene(scene_path);
+    dps::ResizeScene(&scene, ow, oh);
+    scene.render.supersample = 1;
+    const dps::SceneRenderer renderer(scene);
+    const int frames = 20;
+    std::vector<dps::FrameInput> inputs;
+    for (int f = 0; f < frames; ++f) {
+      const dps::FrameState st = renderer.StateAt(scene.FrameTime(f));
+      dps::FrameInput in;
+      in.frame = f;
+      in.t_s = scene.FrameTime(f);
+      in.left = renderer.Render(st, 0, f).image;
+      in.right = renderer.Render(st, 1, f).image;
+      in.motion_known = f > 0;
+      in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(std::max(0, f - 1)), in.t_s);
+      inputs.push_back(in);
+    }
+    const dps::PipelineOptions po = dps::DefaultPipelineOptions(scene.rig);
+    dps::SurroundPipeline pipeline(scene.rig, po);
+    dps::Tracker tracker;
+    dps::OccupancyGrid grid;
+    const dps::MapOptions mo;
+    const cv::Mat background = dps::DrawMapBackground(scene.rig.vehicle, pipeline.coverage(), mo);
+    cv::Mat l, r, bm_out;
+    cv::resize(left, l, cv::Size(ow, oh), 0, 0, cv::INTER_AREA);
+    cv::resize(right, r, cv::Size(ow, oh), 0, 0, cv::INTER_AREA);
+    auto bm = cv::StereoBM::create(64, 9);
+    std::vector<double> front, sides, map, whole, bm_ms;
+    dps::PlanarPose ego;
+    for (int pass = 0; pass < 2; ++pass) {
+      for (const dps::FrameInput& in : inputs) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const dps::FrameOutput out = pipeline.Process(in);
+        ego = dps::Compose(ego, in.current_in_previous);
+        const std::vector<dps::TrackState> tracks = tracker.Update(in.frame + pass * frames, in.t_s + pass * 10.0, ego, out.detections);
+        grid.Update(ego, pipeline.coverage(), out.detections);
+        const cv::Mat picture = dps::DrawFrameMap(background, grid, scene.rig.vehicle, out.detections, tracks, mo, "bench");
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        const auto t1 = std::chrono::steady_clock::now();
+        bm->compute(l, r, bm_out);
+        const double bms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+        if (pass == 0) continue;
+        front.push_back(out.front_ms);
+        sides.push_back(out.sides_ms);
+        map.push_back(ms - out.front_ms - out.sides_ms);
+        whole.push_back(ms);
+        bm_ms.push_back(bms);
+      }
+    }
+    auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    const double frame_ms = median(whole), bm_median = median(bm_ms);
+    std::printf("| %dx%d | %dx%d, D %d | %.2f | %.2f | %.2f | %.2f | %.0f | %.2f | %.2f |\n", ow, oh, po.front.view_width,
+                po.front.view_height, po.front.stereo.num_disparities, median(front), median(sides), median(map),
+                frame_ms, 1000.0 / frame_ms, bm_median, frame_ms / bm_median);
   }
   return 0;
 }

@@ -167,11 +167,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
                     out.detections.size());
       grid.Update(ego, pipeline.coverage(), out.detections);
-      cv::Mat base = map_background.clone();
-      grid.Draw(base, o.map.range_m);
-      DrawOwnCar(base, rig.vehicle, o.map);
-      cv::Mat map = DrawSurroundMap(base, out.detections, o.map, caption);
-      DrawTracks(map, frame_tracks, o.map);
+      const cv::Mat map = DrawFrameMap(map_background, grid, rig.vehicle, out.detections, frame_tracks, o.map, caption);
       for (const TrackState& t : frame_tracks) {
         if (t.confirmed) tracks.push_back(t);
       }

@@ -110,6 +110,17 @@ void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOp
   }
 }
 
+cv::Mat DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
+                     const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
+                     const MapOptions& options, const std::string& caption) {
+  cv::Mat base = background.clone();
+  grid.Draw(base, options.range_m);
+  DrawOwnCar(base, vehicle, options);
+  cv::Mat map = DrawSurroundMap(base, detections, options, caption);
+  DrawTracks(map, tracks, options);
+  return map;
+}
+
 namespace {
 
 cv::Mat Panel(const cv::Mat& image, cv::Size size, const std::string& label) {

@@ -7,10 +7,18 @@
 #include "dps/error.h"
 
 namespace dps {
+namespace {
+
+constexpr double kMaxViewScale = 1.25;
+
+}  // namespace
 
 PipelineOptions DefaultPipelineOptions(const Rig& rig) {
   PipelineOptions o;
-  const double s = rig.Camera("left").model.width() / 640.0;
+  // Views scale with the omni image up to 1.25 times the 640 px settings: larger views cost the
+  // cube of their scale (width, height, disparities) while the mirror's resolution near the
+  // horizon, where the views look, grows more slowly (docs/performance.md).
+  const double s = std::min(kMaxViewScale, rig.Camera("left").model.width() / 640.0);
   const int w = std::max(64, static_cast<int>(std::lround(400 * s))), h = std::max(32, static_cast<int>(std::lround(200 * s)));
   // 96 disparities at 640 px: with a 2 m baseline and f = 170 px the front pair then sees down to
   // 3.5 m, and the side pairs cover vehicles passing at up to about 7 m/s relative speed (15 fps).

@@ -10,6 +10,7 @@
 
 #include "dps/detection.h"
 #include "dps/evaluation.h"
+#include "dps/occupancy_grid.h"
 #include "dps/rig.h"
 #include "dps/tracker.h"
 
@@ -37,6 +38,12 @@ cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>&
 // Draws the confirmed tracks onto a map picture: id, an arrow to the position predicted ahead and
 // the 1-sigma ellipse of that prediction.
 void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOptions& options);
+
+// One frame's whole map as dps-process writes it: the background, the occupancy grid under the own
+// car, the detections, the tracks and the caption.
+cv::Mat DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
+                     const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
+                     const MapOptions& options, const std::string& caption);
 
 // The paper's six-panel diagnostics of one source (Fig. 7, 9-10), each panel the size of the
 // views: the two matched views, their composite (left in red, right in cyan), the colour-coded
