@@ -52,6 +52,14 @@ Detection Merged(const Detection& a, const Detection& b) {
   Detection m = DetectionFromPoints(points, b.range_m < a.range_m ? b.source : a.source);
   m.frame = a.frame;
   m.t_s = a.t_s;
+  // The motion measurement of the part with more points (only motion stereo has one).
+  const Detection* motion = a.has_motion && (!b.has_motion || a.n_points >= b.n_points) ? &a : b.has_motion ? &b : nullptr;
+  if (motion) {
+    m.has_motion = true;
+    m.motion_direction = motion->motion_direction;
+    m.motion_mps = motion->motion_mps;
+    m.motion_sigma_mps = motion->motion_sigma_mps;
+  }
   return m;
 }
 

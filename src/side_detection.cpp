@@ -145,7 +145,7 @@ const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view
 }
 
 SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
-                                const PlanarPose& current_in_previous) {
+                                const PlanarPose& current_in_previous, double interval_s) {
   SideResult r;
   // The camera's displacement, in the previous frame's vehicle frame.
   const Pose rel = current_in_previous.ToPose3();
@@ -160,6 +160,9 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   // Both views parallel to the displacement: heading alpha in the previous frame, alpha - dh in
   // the current one. SideViewSpec's yaw turns towards the front on either side.
   const double alpha = std::atan2(delta.x(), delta.z());
+  // The displacement's direction in the current vehicle frame (for the velocity measurement).
+  const Eigen::Vector2d direction =
+      WorldToBodyDirection(current_in_previous, Eigen::Vector2d(delta.x(), delta.z()).normalized());
   const double sign = side_ == Side::kLeft ? 1.0 : -1.0;
   const int sixteenths = ScaleSixteenths(r.baseline_m);
   r.view_scale = sixteenths / 16.0;
@@ -242,6 +245,20 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     if (heights[heights.size() / 2] < options_.min_obstacle_height_m) continue;
     Detection det = DetectionFromPoints(points, camera_.name);
     det.id = id++;
+    if (interval_s > 0 && contacts.size() >= 3) {
+      // The object's own displacement along the camera's: B - median(depth x disparity) / f.
+      std::vector<double> products, depths;
+      for (const Contact& k : contacts) {
+        products.push_back(k.depth * k.disparity);
+        depths.push_back(k.depth);
+      }
+      std::nth_element(products.begin(), products.begin() + products.size() / 2, products.end());
+      std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+      det.has_motion = true;
+      det.motion_direction = direction;
+      det.motion_mps = (r.baseline_m - products[products.size() / 2] / spec.focal_px) / interval_s;
+      det.motion_sigma_mps = options_.disparity_sigma_px * depths[depths.size() / 2] / spec.focal_px / interval_s;
+    }
     r.detections.push_back(std::move(det));
   }
   return r;

@@ -77,8 +77,8 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in) {
     } else if (!in.motion_known) {
       out.warnings.push_back(Str("frame ", in.frame, ": no known motion (CAN); side detection skipped"));
     } else {
-      out.left = left_->Detect(previous_left_, in.left, in.current_in_previous);
-      out.right = right_->Detect(previous_right_, in.right, in.current_in_previous);
+      out.left = left_->Detect(previous_left_, in.left, in.current_in_previous, in.t_s - previous_t_s_);
+      out.right = right_->Detect(previous_right_, in.right, in.current_in_previous, in.t_s - previous_t_s_);
       for (const SideResult* s : {&out.left, &out.right}) {
         if (s->skipped) continue;
         for (const Detection& d : s->detections) out.detections.push_back(d);
@@ -86,6 +86,7 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in) {
     }
     previous_left_ = in.left.clone();
     previous_right_ = in.right.clone();
+    previous_t_s_ = in.t_s;
     out.sides_ms = ms(t1, now());
   }
   for (Detection& d : out.detections) {

@@ -20,6 +20,19 @@ void Require(bool ok, const char* field, double value, const char* constraint) {
 
 }  // namespace
 
+// A detection's velocity along one direction (motion stereo, Detection::has_motion) updates the
+// track's velocity in that direction: H = [0 0 u], one scalar measurement.
+void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, Track* t) {
+  if (!d.has_motion || !(d.motion_sigma_mps > 0)) return;
+  const Eigen::Vector2d u = world_from_vehicle * d.motion_direction;
+  Eigen::Matrix<double, 1, 4> H;
+  H << 0, 0, u.x(), u.y();
+  const double S = (H * t->P * H.transpose())(0, 0) + d.motion_sigma_mps * d.motion_sigma_mps;
+  const Eigen::Matrix<double, 4, 1> K = t->P * H.transpose() / S;
+  t->x += K * (d.motion_mps - (H * t->x)(0, 0));
+  t->P = (Eigen::Matrix4d::Identity() - K * H) * t->P;
+}
+
 void TrackerOptions::Check() const {
   Require(accel_sigma_mps2 > 0, "accel_sigma_mps2", accel_sigma_mps2, "> 0");
   Require(meas_sigma_m > 0, "meas_sigma_m", meas_sigma_m, "> 0");
@@ -152,6 +165,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     t.x += K * (z[j] - t.x.head<2>());
     t.P = (Eigen::Matrix4d::Identity() - K * (Eigen::Matrix<double, 2, 4>() << Eigen::Matrix2d::Identity(),
                                                 Eigen::Matrix2d::Zero()).finished()) * t.P;
+    ApplyMotion(detections[j], Rwv, &t);
     ++t.hits;
     t.misses = 0;
     if (t.hits >= options_.confirm_hits) t.confirmed = true;
@@ -167,6 +181,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     t.P = Eigen::Matrix4d::Zero();
     t.P.topLeftCorner<2, 2>() = R[j];
     t.P(2, 2) = t.P(3, 3) = options_.init_speed_sigma_mps * options_.init_speed_sigma_mps;
+    ApplyMotion(detections[j], Rwv, &t);
     t.hits = 1;
     t.confirmed = options_.confirm_hits <= 1;
     tracks_.push_back(t);

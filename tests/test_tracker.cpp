@@ -95,7 +95,7 @@ void TestTracks() {
 // camera's z, so the detection's nearest point (the end of that stretch nearest the origin) moves
 // with us while the car stands still. With the extent in the measurement noise the track's speed
 // stays near zero; treating the nearest point as exact follows the sliding point.
-double ParkedPassSpeed(double extent_sigma_fraction) {
+double ParkedPassSpeed(double extent_sigma_fraction, bool motion_stereo_velocity = false) {
   dps::TrackerOptions o;
   o.extent_sigma_fraction = extent_sigma_fraction;
   dps::Tracker tracker(o);
@@ -115,6 +115,12 @@ double ParkedPassSpeed(double extent_sigma_fraction) {
       for (double z = lo; z <= hi + 1e-9; z += 0.1) points.emplace_back(side_x, z);
       points.emplace_back(side_x, near_z);
       dps::Detection d = dps::DetectionFromPoints(points, "right");
+      if (motion_stereo_velocity) {  // side_detection.h: 0 m/s along the displacement, +- 0.2
+        d.has_motion = true;
+        d.motion_direction = Eigen::Vector2d(0, 1);
+        d.motion_mps = 0.0;
+        d.motion_sigma_mps = 0.2;
+      }
       dets.push_back(d);
     }
     for (const dps::TrackState& s : tracker.Update(f, t, ego, dets)) {
@@ -133,6 +139,10 @@ void TestSlidingNearPoint() {
               with_extent, point_only);
   // Less bias, not none: the sliding still pulls the track (docs/tracking.md).
   CHECK(with_extent <= 0.7 * point_only);
+  // With motion stereo's velocity along the displacement the track holds still.
+  const double with_motion = ParkedPassSpeed(dps::TrackerOptions().extent_sigma_fraction, true);
+  std::printf("  with the motion-stereo velocity: %.3f m/s\n", with_motion);
+  CHECK(with_motion <= kVelocityTolMps);
 }
 
 int main() {

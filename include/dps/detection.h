@@ -23,6 +23,12 @@ struct Detection {
   std::vector<Eigen::Vector2d> points;  // ground points (x, z), for the map; not in the CSV
   bool has_velocity = false;            // tracks scored as detections carry their velocity
   double vx_mps = 0.0, vz_mps = 0.0;
+  // Motion stereo also measures the object's ground velocity along the camera's displacement
+  // (side_detection.h); the tracker uses it. Not in the CSV.
+  bool has_motion = false;
+  Eigen::Vector2d motion_direction{0, 0};  // unit, vehicle frame (x, z)
+  double motion_mps = 0.0;                 // ground velocity along motion_direction
+  double motion_sigma_mps = 0.0;
 };
 
 // A detection summarising ground points (at least one): nearest point, extent, count.

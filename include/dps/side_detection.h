@@ -58,6 +58,7 @@ struct SideDetectorOptions {
   // below min_motion_disparity_px.
   double motion_tolerance = 0.35;
   double min_motion_disparity_px = 3.0;
+  double disparity_sigma_px = 1.0;    // matching noise, for the velocity's uncertainty
   double max_gap_below_m = 0.6;
   double contact_tolerance_px = 1.5;
 
@@ -84,8 +85,12 @@ class SideDetector {
   // Detects obstacles from the previous and the current omni image of the camera;
   // `current_in_previous` is the vehicle's pose at the current frame in the previous frame's
   // vehicle frame (MotionProfile::Integrate over the frame interval).
+  // `interval_s` > 0 (the time between the frames): each detection also carries its ground
+  // velocity along the camera's displacement (Detection::has_motion): a rigid object has depth x
+  // disparity = f x (the camera's displacement relative to it) in every column, so its own
+  // displacement is the camera's minus the median of depth x disparity / f.
   SideResult Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
-                    const PlanarPose& current_in_previous);
+                    const PlanarPose& current_in_previous, double interval_s = 0.0);
 
  private:
   RigCamera camera_;

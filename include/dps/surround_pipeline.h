@@ -74,6 +74,7 @@ class SurroundPipeline {
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<SideDetector> left_, right_;
   cv::Mat previous_left_, previous_right_;
+  double previous_t_s_ = 0.0;
 };
 
 }  // namespace dps

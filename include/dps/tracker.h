@@ -70,6 +70,7 @@ class Tracker {
     int hits = 0, misses = 0, age = 0;
     bool confirmed = false;
   };
+  static void ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, Track* t);
   TrackerOptions options_;
   std::vector<Track> tracks_;
   int next_id_ = 1;
