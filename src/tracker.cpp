@@ -37,6 +37,7 @@ void TrackerOptions::Check() const {
   Require(accel_sigma_mps2 > 0, "accel_sigma_mps2", accel_sigma_mps2, "> 0");
   Require(meas_sigma_m > 0, "meas_sigma_m", meas_sigma_m, "> 0");
   Require(meas_sigma_per_m >= 0, "meas_sigma_per_m", meas_sigma_per_m, ">= 0");
+  Require(local_radius_m >= 0, "local_radius_m", local_radius_m, ">= 0");
   Require(extent_sigma_fraction >= 0, "extent_sigma_fraction", extent_sigma_fraction, ">= 0");
   Require(init_speed_sigma_mps > 0, "init_speed_sigma_mps", init_speed_sigma_mps, "> 0");
   Require(gate_chi2 > 0, "gate_chi2", gate_chi2, "> 0");
@@ -120,14 +121,21 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     t.P = F * t.P * F.transpose() + Q;
     ++t.age;
   }
-  // Measurements in the world. A detection's point nearest to the vehicle slides along the
-  // object as other parts come into view (passing a parked car, the nearest point moves with
-  // us), so along the detection's extent it is uncertain by up to half that extent.
+  // Measurements in the world. A track follows one point of its object: the measurement for a
+  // track is the detection's ground point nearest to the track's prediction (a new track starts
+  // at the detection's nearest point to the vehicle). The nearest point to the vehicle alone
+  // would slide along the object as other parts come into view (passing a parked car it moves
+  // with us). What is left of the sliding (the followed point leaving the view) is covered by an
+  // uncertainty of a fraction of the detection's extent.
   std::vector<Eigen::Vector2d> z;
+  std::vector<std::vector<Eigen::Vector2d>> points(detections.size());
   std::vector<Eigen::Matrix2d> R;
   const Eigen::Matrix2d Rwv = BodyToWorldRotation(ego);
-  for (const Detection& d : detections) {
+  for (size_t j = 0; j < detections.size(); ++j) {
+    const Detection& d = detections[j];
     z.push_back(BodyToWorld(ego, {d.x_m, d.z_m}));
+    for (const Eigen::Vector2d& p : d.points) points[j].push_back(BodyToWorld(ego, p));
+    if (points[j].empty()) points[j].push_back(z.back());
     const double s = options_.meas_sigma_m + options_.meas_sigma_per_m * d.range_m;
     Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * s * s;
     if (options_.extent_sigma_fraction > 0 && std::isfinite(d.x_max_m - d.x_min_m) && std::isfinite(d.z_max_m - d.z_min_m)) {
@@ -141,9 +149,27 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   // Gated Mahalanobis costs and the optimal assignment.
   const double forbidden = 1e12;
   std::vector<std::vector<double>> cost(tracks_.size(), std::vector<double>(z.size(), forbidden));
+  // The followed point: the detection's point nearest to the prediction, averaged with its
+  // neighbours within local_radius_m (single points are noisy, and picking the one nearest to the
+  // prediction alone would favour the prediction).
+  const auto nearest_to = [&](size_t j, const Eigen::Vector2d& p) {
+    Eigen::Vector2d best = points[j].front();
+    for (const Eigen::Vector2d& q : points[j]) {
+      if ((q - p).squaredNorm() < (best - p).squaredNorm()) best = q;
+    }
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    int n = 0;
+    for (const Eigen::Vector2d& q : points[j]) {
+      if ((q - best).norm() <= options_.local_radius_m) {
+        sum += q;
+        ++n;
+      }
+    }
+    return Eigen::Vector2d(sum / n);
+  };
   for (size_t i = 0; i < tracks_.size(); ++i) {
     for (size_t j = 0; j < z.size(); ++j) {
-      const Eigen::Vector2d innovation = z[j] - tracks_[i].x.head<2>();
+      const Eigen::Vector2d innovation = nearest_to(j, tracks_[i].x.head<2>()) - tracks_[i].x.head<2>();
       const Eigen::Matrix2d S = tracks_[i].P.topLeftCorner<2, 2>() + R[j];
       const double d2 = innovation.dot(S.ldlt().solve(innovation));
       if (d2 <= options_.gate_chi2) cost[i][j] = d2;
@@ -162,7 +188,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     // Update (H = [I 0]).
     const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + R[j];
     const Eigen::Matrix<double, 4, 2> K = t.P.leftCols<2>() * S.inverse();
-    t.x += K * (z[j] - t.x.head<2>());
+    t.x += K * (nearest_to(j, t.x.head<2>()) - t.x.head<2>());
     t.P = (Eigen::Matrix4d::Identity() - K * (Eigen::Matrix<double, 2, 4>() << Eigen::Matrix2d::Identity(),
                                                 Eigen::Matrix2d::Zero()).finished()) * t.P;
     ApplyMotion(detections[j], Rwv, &t);

@@ -29,6 +29,9 @@ struct TrackerOptions {
   // ... and by this fraction of the detection's extent along x and z (its nearest point slides
   // along the object as the visible part changes), >= 0.
   double extent_sigma_fraction = 0.3;
+  // A track follows one point of its object: each frame the detection's points within this of
+  // the point nearest to the prediction, averaged, are the measurement, >= 0.
+  double local_radius_m = 0.5;
   double init_speed_sigma_mps = 8.0;  // velocity uncertainty of a new track, > 0
   double gate_chi2 = 9.21;            // Mahalanobis gate (2 dof, 99 %), > 0
   int confirm_hits = 3;               // >= 1
