@@ -46,6 +46,11 @@ int ExtendToContact(const cv::Mat& disparity, const cv::Mat& ignore, int x, int 
   return lowest;
 }
 
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
 // The depth of a vehicle-frame point along the view's axis.
 double ViewDepth(const VirtualView& view, const Eigen::Vector3d& p) {
   return (view.spec().vehicle_from_view.transpose() * (p - view.viewpoint_vehicle())).z();
@@ -72,12 +77,8 @@ std::vector<Contact> ConsistentContacts(std::vector<Contact> contacts, double mi
     products.push_back(k.depth * k.disparity);
     disparities.push_back(std::abs(k.disparity));
   }
-  const auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
-  if (median(disparities) < min_disparity) return contacts;
-  const double m = median(products);
+  if (Median(disparities) < min_disparity) return contacts;
+  const double m = Median(products);
   std::vector<Contact> kept;
   for (const Contact& k : contacts) {
     if (std::abs(k.depth * k.disparity - m) <= tolerance * std::abs(m)) kept.push_back(k);
@@ -240,9 +241,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
       points.push_back(k.ground);
       r.obstacle.at<std::uint8_t>(k.y, k.x) = 255;
     }
-    if (points.empty()) continue;
-    std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
-    if (heights[heights.size() / 2] < options_.min_obstacle_height_m) continue;
+    if (points.empty() || Median(heights) < options_.min_obstacle_height_m) continue;
     Detection det = DetectionFromPoints(points, camera_.name);
     det.id = id++;
     if (interval_s > 0 && contacts.size() >= 3) {
@@ -252,12 +251,10 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
         products.push_back(k.depth * k.disparity);
         depths.push_back(k.depth);
       }
-      std::nth_element(products.begin(), products.begin() + products.size() / 2, products.end());
-      std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
       det.has_motion = true;
       det.motion_direction = direction;
-      det.motion_mps = (r.baseline_m - products[products.size() / 2] / spec.focal_px) / interval_s;
-      det.motion_sigma_mps = options_.disparity_sigma_px * depths[depths.size() / 2] / spec.focal_px / interval_s;
+      det.motion_mps = (r.baseline_m - Median(products) / spec.focal_px) / interval_s;
+      det.motion_sigma_mps = options_.disparity_sigma_px * Median(depths) / spec.focal_px / interval_s;
     }
     r.detections.push_back(std::move(det));
   }
