@@ -237,7 +237,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     std::vector<double> heights;
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
-      if (k.ground.norm() > options_.max_range_m) continue;
+      if (k.ground.norm() > options_.max_range_m || k.depth > options_.max_depth_m) continue;
       points.push_back(k.ground);
       r.obstacle.at<std::uint8_t>(k.y, k.x) = 255;
     }

@@ -22,7 +22,7 @@ struct PipelineOptions {
   double merge_distance_m = 1.5;  // detections this close are one object (FuseDetections)
   // Then parts that fit into one vehicle's footprint are one object (MergeVehicleParts);
   // vehicle_length_m = 0: no such merging.
-  double vehicle_length_m = 5.0;
+  double vehicle_length_m = 5.5;
   double vehicle_width_m = 2.2;
   bool vehicle_across_sources_only = false;
 };
