@@ -18,6 +18,7 @@ namespace {
 
 const std::string kSource = DPS_SOURCE_DIR;
 constexpr double kRangeTolFraction = 0.03;  // front range error on the rendered lead car
+constexpr double kExtentTolM = 0.75;         // sides of its extent vs its back (the scoring tolerance)
 
 void TestHistogram() {
   // Road disparity 0.5 (y - 20) below row 20; an obstacle at d = 12.3 in columns 30..50, rows
@@ -226,7 +227,7 @@ void TestRenderedFront() {
     options.temporal_max_variance_px2 = 0;
     dps::FrontDetector front(scene.rig, options);
     int frames = 0, expected = 0, found = 0, false_alarms = 0;
-    double worst = 0;
+    double worst = 0, worst_side = 0;
     for (int f = 0; f < scene.FrameCount(); f += 6) {
       const dps::FrameState st = renderer.StateAt(scene.FrameTime(f));
       const dps::FrontResult r = front.Detect(renderer.Render(st, 0, f).image, renderer.Render(st, 1, f).image);
@@ -241,6 +242,10 @@ void TestRenderedFront() {
           if (dps::DistanceToFootprint(t, {d.x_m, d.z_m}) <= std::max(0.75, 0.1 * range)) {
             matched = true;
             worst = std::max(worst, std::abs(d.range_m - range) / range);
+            // Lateral extent against the car's back (heading 0: x +- width / 2), after the
+            // half-window trim of foreground fattening.
+            worst_side = std::max({worst_side, std::abs(d.x_min_m - (t.x_m - t.width_m / 2)),
+                                   std::abs(d.x_max_m - (t.x_m + t.width_m / 2))});
           }
         }
         found += matched;
@@ -248,12 +253,14 @@ void TestRenderedFront() {
       }
     }
     std::printf("rendered front %-10s: %d frames, %d of %d objects within 20 m matched, %d false, worst range "
-                "error %.1f %%\n", name, frames, found, expected, false_alarms, 100 * worst);
+                "error %.1f %%, worst side of the extent %.2f m off\n", name, frames, found, expected, false_alarms,
+                100 * worst, worst_side);
     CHECK_EQ(false_alarms, 0);
     if (std::string(name) == "lead_car") {
       CHECK(expected >= 10);
       CHECK_EQ(found, expected);
       CHECK(worst <= kRangeTolFraction);
+      CHECK(worst_side <= kExtentTolM);
     }
   }
 }
