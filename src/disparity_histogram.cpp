@@ -141,6 +141,20 @@ std::vector<HistogramComponent> FindComponents(const cv::Mat& histogram, const H
   return components;
 }
 
+std::pair<int, int> ProjectedColumns(const HistogramComponent& c, int trim) {
+  int first = c.x_end, last = c.x_begin - 1;
+  for (int x = c.x_begin; x < c.x_end; ++x) {
+    if (!std::isfinite(c.column_disparity[x - c.x_begin])) continue;
+    first = std::min(first, x);
+    last = std::max(last, x);
+  }
+  if (trim > 0 && last - first + 1 > 2 * trim + 1) {
+    first += trim;
+    last -= trim;
+  }
+  return {first, last};
+}
+
 namespace {
 
 // The first (or last) finite column disparity of a component; NaN if none.

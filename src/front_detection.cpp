@@ -121,19 +121,8 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
     if (heights.empty()) continue;
     std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
     if (heights[heights.size() / 2] < options_.min_obstacle_height_m) continue;
-    // Block matching carries a foreground object's disparity up to half a window beyond its edges
-    // (foreground fattening): the outermost half window of columns is not projected.
-    int first = c.x_end, last = c.x_begin - 1;
-    for (int x = c.x_begin; x < c.x_end; ++x) {
-      if (!std::isfinite(c.column_disparity[x - c.x_begin])) continue;
-      first = std::min(first, x);
-      last = std::max(last, x);
-    }
-    const int trim = options_.stereo.block_width / 2;
-    if (last - first + 1 > 2 * trim + 1) {
-      first += trim;
-      last -= trim;
-    }
+    // The outermost half window of columns is foreground fattening, not the object.
+    const auto [first, last] = ProjectedColumns(c, options_.stereo.block_width / 2);
     std::vector<Eigen::Vector2d> points;
     for (int x = first; x <= last; ++x) {
       const float d = c.column_disparity[x - c.x_begin];

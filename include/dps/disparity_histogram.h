@@ -16,6 +16,7 @@
 #pragma once
 
 #include <functional>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -93,6 +94,12 @@ std::vector<HistogramComponent> LinkComponents(
     std::vector<HistogramComponent> components, const cv::Mat& disparity, const cv::Mat& road,
     const HistogramOptions& options, cv::Mat* labels = nullptr,
     const std::function<bool(int x0, float d0, int x1, float d1)>& allow = nullptr);
+
+// The columns [first, last] of a component to project: from its first to its last column with a
+// centroid, less `trim` at each end when it is wider than 2 trim + 1. Block matching carries a
+// foreground object's disparity up to half a window beyond its edges (foreground fattening), so
+// the detectors trim half the block width. first > last when no column has a centroid.
+std::pair<int, int> ProjectedColumns(const HistogramComponent& component, int trim);
 
 // The disparity of bin centre `row`.
 inline double BinDisparity(const HistogramOptions& o, double row) { return o.min_disparity + (row + 0.5) * o.bin_px; }
