@@ -205,9 +205,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   int id = 0;
   for (const HistogramComponent& c : components) {
     std::vector<Contact> contacts;
-    // The outermost half window of columns is foreground fattening, not the object.
-    const auto [first, last] = ProjectedColumns(c, options_.stereo.block_width / 2);
-    for (int x = first; x <= last; ++x) {
+    for (int x = c.x_begin; x < c.x_end; ++x) {
       // The component's pixels in this column; the bottom-most is the contact with the road.
       int bottom = -1, rows = 0;
       for (int y = 0; y < spec.height; ++y) {
