@@ -3,10 +3,13 @@
 //
 // State per track: position and ground velocity (px, pz, vx, vz) in a world frame that the ego
 // motion (CAN speed and yaw rate) carries the vehicle through, so that parked things stay put and
-// the velocity is over the ground. Constant-velocity motion with white acceleration noise;
-// measurements are the detections' nearest points, mapped into the world through the ego pose
-// (the measurement model is linear given the pose, so the extended filter reduces to the plain
-// one), with a standard deviation growing with range. Detections are assigned to tracks by the
+// the velocity is over the ground. Constant-velocity motion with white acceleration noise. A
+// track follows one point of its object: its position measurement is the detection's ground
+// points near the track's prediction (averaged within local_radius_m), mapped into the world
+// through the ego pose (the measurement model is linear given the pose, so the extended filter
+// reduces to the plain one), with a standard deviation growing with range and with the
+// detection's extent; side detections add their motion-stereo velocity along the camera's
+// displacement as a scalar velocity measurement. Detections are assigned to tracks by the
 // Hungarian method on the Mahalanobis distance, within a chi-square gate. A track is born from an
 // unassigned detection, confirmed after `confirm_hits` hits and deleted after `max_misses`
 // frames without one.
