@@ -63,22 +63,25 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
   return map;
 }
 
-cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections, const MapOptions& o,
-                        const std::string& caption) {
+namespace {
+
+// Draws the obstacles and the caption onto a map picture (DrawSurroundMap on a copy,
+// DrawFrameMap on its own layers).
+void DrawObstacles(cv::Mat& map, const std::vector<Detection>& detections, const MapOptions& o,
+                   const std::string& caption) {
   const MapProjection to_px(o);
   const double scale = to_px.scale;
-  cv::Mat map = background.clone();
   // Obstacles: ground points joined, closed in the picture (each within its own bounding box).
   const int close = cvRound(scale) | 1;
   const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(close, close));
   const cv::Rect picture(0, 0, map.cols, map.rows);
+  const int pad = 2 * close + std::max(2, cvRound(0.25 * scale));
   for (const Detection& d : detections) {
     std::vector<cv::Point> pts;
     for (const Eigen::Vector2d& p : d.points) pts.push_back(to_px(p.x(), p.y()));
     if (pts.empty()) pts.push_back(to_px(d.x_m, d.z_m));
-    const int pad = 2 * close + std::max(2, cvRound(0.25 * scale));
-    const cv::Rect box = cv::Rect(cv::boundingRect(pts).tl() - cv::Point(pad, pad),
-                                  cv::boundingRect(pts).br() + cv::Point(pad, pad)) & picture;
+    const cv::Rect bounds = cv::boundingRect(pts);
+    const cv::Rect box = cv::Rect(bounds.tl() - cv::Point(pad, pad), bounds.br() + cv::Point(pad, pad)) & picture;
     if (box.empty()) continue;
     cv::Mat mask(box.size(), CV_8U, cv::Scalar(0));
     for (cv::Point& p : pts) p -= box.tl();
@@ -89,6 +92,14 @@ cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>&
   }
   for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, cv::Scalar(0, 0, 120), cv::FILLED, cv::LINE_AA);
   cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+}
+
+}  // namespace
+
+cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections, const MapOptions& o,
+                        const std::string& caption) {
+  cv::Mat map = background.clone();
+  DrawObstacles(map, detections, o, caption);
   return map;
 }
 
@@ -113,10 +124,10 @@ void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOp
 cv::Mat DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
                      const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
                      const MapOptions& options, const std::string& caption) {
-  cv::Mat base = background.clone();
-  grid.Draw(base, options.range_m);
-  DrawOwnCar(base, vehicle, options);
-  cv::Mat map = DrawSurroundMap(base, detections, options, caption);
+  cv::Mat map = background.clone();
+  grid.Draw(map, options.range_m);
+  DrawOwnCar(map, vehicle, options);
+  DrawObstacles(map, detections, options, caption);
   DrawTracks(map, tracks, options);
   return map;
 }

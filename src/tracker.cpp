@@ -167,9 +167,12 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     }
     return Eigen::Vector2d(sum / n);
   };
+  // measured[i][j]: detection j's followed point for track i (for the cost and the update).
+  std::vector<std::vector<Eigen::Vector2d>> measured(tracks_.size(), std::vector<Eigen::Vector2d>(z.size()));
   for (size_t i = 0; i < tracks_.size(); ++i) {
     for (size_t j = 0; j < z.size(); ++j) {
-      const Eigen::Vector2d innovation = nearest_to(j, tracks_[i].x.head<2>()) - tracks_[i].x.head<2>();
+      measured[i][j] = nearest_to(j, tracks_[i].x.head<2>());
+      const Eigen::Vector2d innovation = measured[i][j] - tracks_[i].x.head<2>();
       const Eigen::Matrix2d S = tracks_[i].P.topLeftCorner<2, 2>() + R[j];
       const double d2 = innovation.dot(S.ldlt().solve(innovation));
       if (d2 <= options_.gate_chi2) cost[i][j] = d2;
@@ -188,7 +191,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     // Update (H = [I 0]).
     const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + R[j];
     const Eigen::Matrix<double, 4, 2> K = t.P.leftCols<2>() * S.inverse();
-    t.x += K * (nearest_to(j, t.x.head<2>()) - t.x.head<2>());
+    t.x += K * (measured[i][j] - t.x.head<2>());
     t.P = (Eigen::Matrix4d::Identity() - K * (Eigen::Matrix<double, 2, 4>() << Eigen::Matrix2d::Identity(),
                                                 Eigen::Matrix2d::Zero()).finished()) * t.P;
     ApplyMotion(detections[j], Rwv, &t);

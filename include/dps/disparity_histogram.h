@@ -98,7 +98,7 @@ std::vector<HistogramComponent> LinkComponents(
 // The columns [first, last] of a component to project: from its first to its last column with a
 // centroid, less `trim` at each end when it is wider than 2 trim + 1. Block matching carries a
 // foreground object's disparity up to half a window beyond its edges (foreground fattening), so
-// the detectors trim half the block width. first > last when no column has a centroid.
+// the front detector trims half the block width. first > last when no column has a centroid.
 std::pair<int, int> ProjectedColumns(const HistogramComponent& component, int trim);
 
 // The disparity of bin centre `row`.
