@@ -52,6 +52,8 @@ Detection Merged(const Detection& a, const Detection& b) {
   Detection m = DetectionFromPoints(points, b.range_m < a.range_m ? b.source : a.source);
   m.frame = a.frame;
   m.t_s = a.t_s;
+  m.clipped_ends = a.clipped_ends;
+  m.clipped_ends.insert(m.clipped_ends.end(), b.clipped_ends.begin(), b.clipped_ends.end());
   // The motion measurement of the part with more points (only motion stereo has one).
   const Detection* motion = a.has_motion && (!b.has_motion || a.n_points >= b.n_points) ? &a : b.has_motion ? &b : nullptr;
   if (motion) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include <opencv2/imgproc.hpp>
@@ -227,6 +228,15 @@ std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> c
     out.push_back(std::move(a));
   }
   return out;
+}
+
+std::pair<int, int> ValidColumns(const cv::Mat& disparity) {
+  cv::Mat any;
+  cv::reduce(disparity < kInvalidDisparity, any, 0, cv::REDUCE_MAX);
+  int first = 0, last = any.cols - 1;
+  while (first < any.cols && !any.at<std::uint8_t>(0, first)) ++first;
+  while (last >= 0 && !any.at<std::uint8_t>(0, last)) --last;
+  return {first, last};
 }
 
 }  // namespace dps

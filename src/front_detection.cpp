@@ -101,6 +101,8 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
   r.obstacle = cv::Mat(r.histogram.size(), CV_32F, cv::Scalar(0));
   int id = 0;
   const HistogramOptions& ho = options_.histogram;
+  const auto [first_valid, last_valid] = ValidColumns(r.disparity);
+  const int margin = options_.stereo.block_width;
   for (const HistogramComponent& c : components) {
     // An obstacle stands up from the road: in each column it fills many rows with its disparity
     // (rows ~ height * d / B). Flat things (lane markings, road matched wrongly) and stray matches
@@ -134,6 +136,8 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
     }
     if (points.empty()) continue;
     Detection det = DetectionFromPoints(points, "front");
+    if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
+    if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
     det.id = id++;
     r.detections.push_back(std::move(det));
   }

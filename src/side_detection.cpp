@@ -202,6 +202,8 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   r.histogram = ColumnHistogram(r.disparity, r.score, ho, &moments);
   const std::vector<HistogramComponent> components = FindComponents(r.histogram, ho, &labels, moments);
   r.obstacle = cv::Mat(spec.height, spec.width, CV_8U, cv::Scalar(0));
+  const auto [first_valid, last_valid] = ValidColumns(r.disparity);
+  const int margin = options_.stereo.block_width;
   int id = 0;
   for (const HistogramComponent& c : components) {
     std::vector<Contact> contacts;
@@ -243,6 +245,8 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     }
     if (points.empty() || Median(heights) < options_.min_obstacle_height_m) continue;
     Detection det = DetectionFromPoints(points, camera_.name);
+    if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
+    if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
     det.id = id++;
     if (interval_s > 0 && contacts.size() >= 3) {
       // The object's own displacement along the camera's: B - median(depth x disparity) / f.
@@ -251,10 +255,16 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
         products.push_back(k.depth * k.disparity);
         depths.push_back(k.depth);
       }
+      const double product = Median(products);
+      std::vector<double> deviations;
+      for (const double p : products) deviations.push_back(std::abs(p - product));
       det.has_motion = true;
       det.motion_direction = direction;
-      det.motion_mps = (r.baseline_m - Median(products) / spec.focal_px) / interval_s;
-      det.motion_sigma_mps = options_.disparity_sigma_px * Median(depths) / spec.focal_px / interval_s;
+      det.motion_mps = (r.baseline_m - product / spec.focal_px) / interval_s;
+      // The matching noise, or the columns' own scatter (robust sigma) when that is larger: a
+      // component mixing the object with its background disagrees with itself.
+      det.motion_sigma_mps = std::max(options_.disparity_sigma_px * Median(depths), 1.4826 * Median(deviations)) /
+                             spec.focal_px / interval_s;
     }
     r.detections.push_back(std::move(det));
   }

@@ -21,26 +21,37 @@ void Require(bool ok, const char* field, double value, const char* constraint) {
 }  // namespace
 
 // A detection's velocity along one direction (motion stereo, Detection::has_motion) updates the
-// track's velocity in that direction: H = [0 0 u], one scalar measurement.
-void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, Track* t) {
+// track's velocity in that direction: H = [0 0 u], one scalar measurement, unless it lies outside
+// the gate (motion stereo of a part that moves differently, e.g. the background at a car's end).
+void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, double gate_chi2, Track* t) {
   if (!d.has_motion || !(d.motion_sigma_mps > 0)) return;
   const Eigen::Vector2d u = world_from_vehicle * d.motion_direction;
-  Eigen::Matrix<double, 1, 4> H;
-  H << 0, 0, u.x(), u.y();
+  Eigen::Matrix<double, 1, 5> H;
+  H << 0, 0, u.x(), u.y(), 0;
   const double S = (H * t->P * H.transpose())(0, 0) + d.motion_sigma_mps * d.motion_sigma_mps;
-  const Eigen::Matrix<double, 4, 1> K = t->P * H.transpose() / S;
-  t->x += K * (d.motion_mps - (H * t->x)(0, 0));
-  t->P = (Eigen::Matrix4d::Identity() - K * H) * t->P;
+  const double innovation = d.motion_mps - (H * t->x)(0, 0);
+  if (innovation * innovation > gate_chi2 * S) return;
+  const Eigen::Matrix<double, 5, 1> K = t->P * H.transpose() / S;
+  t->x += K * innovation;
+  t->P = (Cov::Identity() - K * H) * t->P;
 }
 
 void TrackerOptions::Check() const {
   Require(accel_sigma_mps2 > 0, "accel_sigma_mps2", accel_sigma_mps2, "> 0");
+  Require(across_accel_sigma_mps2 > 0, "across_accel_sigma_mps2", across_accel_sigma_mps2, "> 0");
+  Require(turn_accel_sigma_radps2 >= 0, "turn_accel_sigma_radps2", turn_accel_sigma_radps2, ">= 0");
+  Require(init_turn_sigma_radps >= 0, "init_turn_sigma_radps", init_turn_sigma_radps, ">= 0");
   Require(meas_sigma_m > 0, "meas_sigma_m", meas_sigma_m, "> 0");
   Require(meas_sigma_per_m >= 0, "meas_sigma_per_m", meas_sigma_per_m, ">= 0");
   Require(local_radius_m >= 0, "local_radius_m", local_radius_m, ">= 0");
+  Require(clip_radius_m >= 0, "clip_radius_m", clip_radius_m, ">= 0");
+  Require(max_hidden_m >= 0, "max_hidden_m", max_hidden_m, ">= 0");
+  Require(axis_min_speed_mps >= 0, "axis_min_speed_mps", axis_min_speed_mps, ">= 0");
   Require(extent_sigma_fraction >= 0, "extent_sigma_fraction", extent_sigma_fraction, ">= 0");
   Require(init_speed_sigma_mps > 0, "init_speed_sigma_mps", init_speed_sigma_mps, "> 0");
+  Require(init_across_speed_sigma_mps > 0, "init_across_speed_sigma_mps", init_across_speed_sigma_mps, "> 0");
   Require(gate_chi2 > 0, "gate_chi2", gate_chi2, "> 0");
+  Require(motion_gate_chi2 > 0, "motion_gate_chi2", motion_gate_chi2, "> 0");
   Require(confirm_hits >= 1, "confirm_hits", confirm_hits, ">= 1");
   Require(max_misses >= 1, "max_misses", max_misses, ">= 1");
   Require(predict_ahead_s >= 0, "predict_ahead_s", predict_ahead_s, ">= 0");
@@ -103,22 +114,64 @@ std::vector<int> HungarianAssignment(const std::vector<std::vector<double>>& cos
 
 Tracker::Tracker(const TrackerOptions& options) : options_(options) { options_.Check(); }
 
+// A track's axis (world): along its velocity when it moves, else along the road (the vehicle's
+// heading); objects beside the road are long along it and move along it.
+Eigen::Vector2d Tracker::Axis(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const {
+  const Eigen::Vector2d v = t.x.segment<2>(2);
+  return v.norm() >= options_.axis_min_speed_mps ? Eigen::Vector2d(v.normalized())
+                                                 : Eigen::Vector2d(world_from_vehicle.col(1));
+}
+
+// The acceleration's covariance (world): accel_sigma_mps2 along the axis, across_accel_sigma_mps2
+// across it.
+Eigen::Matrix2d Tracker::AccelCovariance(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const {
+  const Eigen::Vector2d a = Axis(t, world_from_vehicle), n(-a.y(), a.x());
+  return options_.accel_sigma_mps2 * options_.accel_sigma_mps2 * a * a.transpose() +
+         options_.across_accel_sigma_mps2 * options_.across_accel_sigma_mps2 * n * n.transpose();
+}
+
+// White acceleration of covariance `accel` and white turn acceleration over dt.
+Tracker::Cov Tracker::ProcessNoise(const Eigen::Matrix2d& accel, double dt) const {
+  Cov Q = Cov::Zero();
+  Q.topLeftCorner<2, 2>() = accel * (dt * dt * dt * dt / 4);
+  Q.block<2, 2>(0, 2) = Q.block<2, 2>(2, 0) = accel * (dt * dt * dt / 2);
+  Q.block<2, 2>(2, 2) = accel * (dt * dt);
+  Q(4, 4) = options_.turn_accel_sigma_radps2 * options_.turn_accel_sigma_radps2 * dt * dt;
+  return Q;
+}
+
+// The constant-turn motion over dt: the velocity turns by w dt (towards +x for w > 0), the
+// position advances by the mean of the old and the new velocity. F receives the Jacobian.
+Tracker::State Tracker::Predict(const State& x, double dt, Cov* F) {
+  const double a = x(4) * dt, c = std::cos(a), s = std::sin(a);
+  Eigen::Matrix2d rot, drot;
+  rot << c, s, -s, c;
+  drot << -s, c, -c, -s;
+  const Eigen::Vector2d v = x.segment<2>(2), v1 = rot * v;
+  State out = x;
+  out.head<2>() += dt / 2 * (v + v1);
+  out.segment<2>(2) = v1;
+  if (F) {
+    *F = Cov::Identity();
+    F->block<2, 2>(0, 2) = dt / 2 * (Eigen::Matrix2d::Identity() + rot);
+    F->block<2, 1>(0, 4) = dt * dt / 2 * drot * v;
+    F->block<2, 2>(2, 2) = rot;
+    F->block<2, 1>(2, 4) = dt * drot * v;
+  }
+  return out;
+}
+
 std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose& ego,
                                         const std::vector<Detection>& detections) {
   const double dt = started_ ? std::max(0.0, t_s - last_t_) : 0.0;
   started_ = true;
   last_t_ = t_s;
-  // Predict (constant velocity, white acceleration noise).
-  Eigen::Matrix4d F = Eigen::Matrix4d::Identity();
-  F(0, 2) = F(1, 3) = dt;
-  const double q = options_.accel_sigma_mps2 * options_.accel_sigma_mps2;
-  Eigen::Matrix4d Q = Eigen::Matrix4d::Zero();
-  Q(0, 0) = Q(1, 1) = q * dt * dt * dt * dt / 4;
-  Q(0, 2) = Q(2, 0) = Q(1, 3) = Q(3, 1) = q * dt * dt * dt / 2;
-  Q(2, 2) = Q(3, 3) = q * dt * dt;
+  const Eigen::Matrix2d Rwv = BodyToWorldRotation(ego);
+  // Predict (constant turn, white acceleration noise, smaller across the track's axis).
   for (Track& t : tracks_) {
-    t.x = F * t.x;
-    t.P = F * t.P * F.transpose() + Q;
+    Cov F;
+    t.x = Predict(t.x, dt, &F);
+    t.P = F * t.P * F.transpose() + ProcessNoise(AccelCovariance(t, Rwv), dt);
     ++t.age;
   }
   // Measurements in the world. A track follows one point of its object: the measurement for a
@@ -128,13 +181,13 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   // with us). What is left of the sliding (the followed point leaving the view) is covered by an
   // uncertainty of a fraction of the detection's extent.
   std::vector<Eigen::Vector2d> z;
-  std::vector<std::vector<Eigen::Vector2d>> points(detections.size());
+  std::vector<std::vector<Eigen::Vector2d>> points(detections.size()), clipped_ends(detections.size());
   std::vector<Eigen::Matrix2d> R;
-  const Eigen::Matrix2d Rwv = BodyToWorldRotation(ego);
   for (size_t j = 0; j < detections.size(); ++j) {
     const Detection& d = detections[j];
     z.push_back(BodyToWorld(ego, {d.x_m, d.z_m}));
     for (const Eigen::Vector2d& p : d.points) points[j].push_back(BodyToWorld(ego, p));
+    for (const Eigen::Vector2d& p : d.clipped_ends) clipped_ends[j].push_back(BodyToWorld(ego, p));
     if (points[j].empty()) points[j].push_back(z.back());
     const double s = options_.meas_sigma_m + options_.meas_sigma_per_m * d.range_m;
     Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * s * s;
@@ -151,7 +204,13 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   std::vector<std::vector<double>> cost(tracks_.size(), std::vector<double>(z.size(), forbidden));
   // The followed point: the detection's point nearest to the prediction, averaged with its
   // neighbours within local_radius_m (single points are noisy, and picking the one nearest to the
-  // prediction alone would favour the prediction).
+  // prediction alone would favour the prediction). When that point is an end where the view cut
+  // the object (Detection::clipped_ends), the followed point may lie beyond it unseen: only the
+  // offset across the track's axis is measured, and only up to max_hidden_m along it.
+  struct Measured {
+    Eigen::Vector2d point;
+    bool clipped = false;
+  };
   const auto nearest_to = [&](size_t j, const Eigen::Vector2d& p) {
     Eigen::Vector2d best = points[j].front();
     for (const Eigen::Vector2d& q : points[j]) {
@@ -165,16 +224,29 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
         ++n;
       }
     }
-    return Eigen::Vector2d(sum / n);
+    Measured m{sum / n, false};
+    for (const Eigen::Vector2d& e : clipped_ends[j]) m.clipped = m.clipped || (e - best).norm() <= options_.clip_radius_m;
+    return m;
   };
-  // measured[i][j]: detection j's followed point for track i (for the cost and the update).
-  std::vector<std::vector<Eigen::Vector2d>> measured(tracks_.size(), std::vector<Eigen::Vector2d>(z.size()));
+  // measured[i][j]: detection j's followed point for track i (for the cost and the update);
+  // across[i][j]: the unit vector across track i's axis when only that offset is measured, else 0.
+  std::vector<std::vector<Measured>> measured(tracks_.size(), std::vector<Measured>(z.size()));
+  std::vector<Eigen::Vector2d> across(tracks_.size());
   for (size_t i = 0; i < tracks_.size(); ++i) {
+    const Eigen::Vector2d a = Axis(tracks_[i], Rwv);
+    across[i] = Eigen::Vector2d(-a.y(), a.x());
     for (size_t j = 0; j < z.size(); ++j) {
       measured[i][j] = nearest_to(j, tracks_[i].x.head<2>());
-      const Eigen::Vector2d innovation = measured[i][j] - tracks_[i].x.head<2>();
+      const Eigen::Vector2d innovation = measured[i][j].point - tracks_[i].x.head<2>();
       const Eigen::Matrix2d S = tracks_[i].P.topLeftCorner<2, 2>() + R[j];
-      const double d2 = innovation.dot(S.ldlt().solve(innovation));
+      double d2;
+      if (measured[i][j].clipped) {
+        if (std::abs(innovation.dot(a)) > options_.max_hidden_m) continue;
+        const double e = innovation.dot(across[i]);
+        d2 = e * e / across[i].dot(S * across[i]);
+      } else {
+        d2 = innovation.dot(S.ldlt().solve(innovation));
+      }
       if (d2 <= options_.gate_chi2) cost[i][j] = d2;
     }
   }
@@ -188,13 +260,25 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
       continue;
     }
     used[j] = true;
-    // Update (H = [I 0]).
-    const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + R[j];
-    const Eigen::Matrix<double, 4, 2> K = t.P.leftCols<2>() * S.inverse();
-    t.x += K * (measured[i][j] - t.x.head<2>());
-    t.P = (Eigen::Matrix4d::Identity() - K * (Eigen::Matrix<double, 2, 4>() << Eigen::Matrix2d::Identity(),
-                                                Eigen::Matrix2d::Zero()).finished()) * t.P;
-    ApplyMotion(detections[j], Rwv, &t);
+    const Measured& m = measured[i][j];
+    if (m.clipped) {
+      // Only the offset across the axis: H = [n^T 0], one scalar measurement.
+      Eigen::Matrix<double, 1, 5> H;
+      H << across[i].x(), across[i].y(), 0, 0, 0;
+      const double S = (H * t.P * H.transpose())(0, 0) + across[i].dot(R[j] * across[i]);
+      const Eigen::Matrix<double, 5, 1> K = t.P * H.transpose() / S;
+      t.x += K * across[i].dot(m.point - t.x.head<2>());
+      t.P = (Cov::Identity() - K * H) * t.P;
+    } else {
+      // Update (H = [I 0]).
+      const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + R[j];
+      const Eigen::Matrix<double, 5, 2> K = t.P.leftCols<2>() * S.inverse();
+      t.x += K * (m.point - t.x.head<2>());
+      Eigen::Matrix<double, 2, 5> H = Eigen::Matrix<double, 2, 5>::Zero();
+      H.leftCols<2>().setIdentity();
+      t.P = (Cov::Identity() - K * H) * t.P;
+    }
+    ApplyMotion(detections[j], Rwv, options_.motion_gate_chi2, &t);
     ++t.hits;
     t.misses = 0;
     if (t.hits >= options_.confirm_hits) t.confirmed = true;
@@ -206,11 +290,13 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     if (used[j]) continue;
     Track t;
     t.id = next_id_++;
-    t.x << z[j], 0, 0;
-    t.P = Eigen::Matrix4d::Zero();
+    t.x << z[j], 0, 0, 0;
+    t.P = Cov::Zero();
     t.P.topLeftCorner<2, 2>() = R[j];
-    t.P(2, 2) = t.P(3, 3) = options_.init_speed_sigma_mps * options_.init_speed_sigma_mps;
-    ApplyMotion(detections[j], Rwv, &t);
+    const Eigen::Vector2d sigma_v(options_.init_across_speed_sigma_mps, options_.init_speed_sigma_mps);
+    t.P.block<2, 2>(2, 2) = Rwv * sigma_v.cwiseAbs2().asDiagonal() * Rwv.transpose();
+    t.P(4, 4) = options_.init_turn_sigma_radps * options_.init_turn_sigma_radps;
+    ApplyMotion(detections[j], Rwv, std::numeric_limits<double>::infinity(), &t);
     t.hits = 1;
     t.confirmed = options_.confirm_hits <= 1;
     tracks_.push_back(t);
@@ -223,7 +309,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     s.frame = frame;
     s.t_s = t_s;
     s.id = t.id;
-    const Eigen::Vector2d p = WorldToBody(ego, t.x.head<2>()), v = WorldToBodyDirection(ego, t.x.tail<2>());
+    const Eigen::Vector2d p = WorldToBody(ego, t.x.head<2>()), v = WorldToBodyDirection(ego, t.x.segment<2>(2));
     const Eigen::Matrix2d cov = Rv * t.P.topLeftCorner<2, 2>() * Rv.transpose();
     s.x_m = p.x();
     s.z_m = p.y();
@@ -235,12 +321,9 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     s.confirmed = t.confirmed;
     // Prediction ahead, in the current vehicle frame (the ego's own motion is not predicted).
     const double h = options_.predict_ahead_s;
-    Eigen::Matrix4d Fh = Eigen::Matrix4d::Identity();
-    Fh(0, 2) = Fh(1, 3) = h;
-    const Eigen::Vector4d xh = Fh * t.x;
-    Eigen::Matrix4d Ph = Fh * t.P * Fh.transpose();
-    Ph(0, 0) += q * h * h * h * h / 4;
-    Ph(1, 1) += q * h * h * h * h / 4;
+    Cov Fh;
+    const State xh = Predict(t.x, h, &Fh);
+    const Cov Ph = Fh * t.P * Fh.transpose() + ProcessNoise(AccelCovariance(t, Rwv), h);
     s.predicted = WorldToBody(ego, xh.head<2>());
     s.predicted_cov = Rv * Ph.topLeftCorner<2, 2>() * Rv.transpose();
     out.push_back(s);

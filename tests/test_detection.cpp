@@ -65,6 +65,17 @@ void TestHistogram() {
   CHECK(dps::FindComponents(hist, o).empty());
   o.bin_px = 0;
   CHECK_THROWS_WITH(o.Check(), dps::Error, "bin_px");
+  // The columns with any valid disparity: the matcher's border (0..3) and a masked edge (18, 19)
+  // hold none; a column with a single valid pixel counts.
+  cv::Mat border(10, 20, CV_32F, cv::Scalar(dps::kInvalidDisparity));
+  border.colRange(4, 18).setTo(5.0f);
+  border.col(4).setTo(dps::kInvalidDisparity);
+  border.at<float>(7, 4) = 3.0f;
+  const auto [first, last] = dps::ValidColumns(border);
+  CHECK_EQ(first, 4);
+  CHECK_EQ(last, 17);
+  const auto [none_first, none_last] = dps::ValidColumns(cv::Mat(4, 6, CV_32F, cv::Scalar(dps::kInvalidDisparity)));
+  CHECK(none_first > none_last);
 }
 
 // A slanted surface (disparity 20 falling to 11 across columns 10..100) over a road, with a

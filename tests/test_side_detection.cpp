@@ -115,6 +115,14 @@ void TestOvertakingLeft() {
     const double front = p.truth.z_m + p.truth.length_m / 2;
     std::printf("  front of the detection at z = %.3f m, truth %.3f m\n", r.detections[0].z_max_m, front);
     CHECK_NEAR(r.detections[0].z_max_m, front, kSideTolM);
+    // Its front ends the detection; its rear goes on beyond the view's edge: the rear end of the
+    // detection is marked as cut by the view (for the tracker), the front is not.
+    const dps::Detection& d = r.detections[0];
+    std::printf("  %zu end(s) cut by the view:", d.clipped_ends.size());
+    for (const Eigen::Vector2d& e : d.clipped_ends) std::printf(" (%.2f, %.2f)", e.x(), e.y());
+    std::printf(" (detection z from %.2f)\n", d.z_min_m);
+    CHECK_EQ(d.clipped_ends.size(), size_t{1});
+    if (!d.clipped_ends.empty()) CHECK_NEAR(d.clipped_ends[0].y(), d.z_min_m, kSideTolM);
   }
 }
 

@@ -21,6 +21,10 @@ struct Detection {
   double x_min_m = 0.0, x_max_m = 0.0, z_min_m = 0.0, z_max_m = 0.0;
   int n_points = 0;
   std::vector<Eigen::Vector2d> points;  // ground points (x, z), for the map; not in the CSV
+  // The end points (among `points`) where the view's edge, not the object, ends the detection:
+  // the object may go on beyond them unseen (the tracker then measures only across its axis).
+  // Not in the CSV.
+  std::vector<Eigen::Vector2d> clipped_ends;
   bool has_velocity = false;            // tracks scored as detections carry their velocity
   double vx_mps = 0.0, vz_mps = 0.0;
   // Motion stereo also measures the object's ground velocity along the camera's displacement

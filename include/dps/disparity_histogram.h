@@ -101,6 +101,11 @@ std::vector<HistogramComponent> LinkComponents(
 // the front detector trims half the block width. first > last when no column has a centroid.
 std::pair<int, int> ProjectedColumns(const HistogramComponent& component, int trim);
 
+// The columns [first, last] of a disparity image holding any valid disparity (first > last when
+// none): what the view and the matcher's border let be seen. A component reaching within a
+// window of them may be cut there by the view's edge rather than ended by the object.
+std::pair<int, int> ValidColumns(const cv::Mat& disparity);
+
 // The disparity of bin centre `row`.
 inline double BinDisparity(const HistogramOptions& o, double row) { return o.min_disparity + (row + 0.5) * o.bin_px; }
 

@@ -26,7 +26,14 @@
 namespace dps {
 
 struct TrackerOptions {
-  double accel_sigma_mps2 = 8.0;      // process noise, > 0
+  // Process noise: acceleration along the track's axis (see axis_min_speed_mps) and across it
+  // (a car turning at 15 deg/s and 7 m/s accelerates 1.8 m/s^2 sideways), > 0.
+  double accel_sigma_mps2 = 8.0;
+  double across_accel_sigma_mps2 = 3.0;
+  // Constant turn: the turn rate's random change, rad/s^2, >= 0, and a new track's turn rate
+  // uncertainty (rad/s, >= 0; its turn rate starts at 0).
+  double turn_accel_sigma_radps2 = 0.3;
+  double init_turn_sigma_radps = 0.3;
   double meas_sigma_m = 0.3;          // measurement sigma at range 0, > 0
   double meas_sigma_per_m = 0.04;     // ... growing by this per metre of range, >= 0
   // ... and by this fraction of the detection's extent along x and z (its nearest point slides
@@ -35,8 +42,19 @@ struct TrackerOptions {
   // A track follows one point of its object: each frame the detection's points within this of
   // the point nearest to the prediction, averaged, are the measurement, >= 0.
   double local_radius_m = 0.5;
-  double init_speed_sigma_mps = 8.0;  // velocity uncertainty of a new track, > 0
+  // When the detection's point nearest to the prediction lies within clip_radius_m of an end cut
+  // by the view's edge (Detection::clipped_ends), the followed point may be beyond it, hidden, by
+  // up to max_hidden_m along the track's axis: only the offset across the axis is measured. The
+  // axis is the track's velocity from axis_min_speed_mps on, else the road's (vehicle heading).
+  double clip_radius_m = 0.5;     // >= 0
+  double max_hidden_m = 6.0;      // >= 0
+  double axis_min_speed_mps = 2.0;  // >= 0
+  // A new track's velocity uncertainty along the road (the vehicle's heading) and across it
+  // (vehicles mostly drive along the road), > 0.
+  double init_speed_sigma_mps = 8.0;
+  double init_across_speed_sigma_mps = 1.0;
   double gate_chi2 = 9.21;            // Mahalanobis gate (2 dof, 99 %), > 0
+  double motion_gate_chi2 = 6.63;     // gate of a motion-stereo velocity (1 dof, 99 %), > 0
   int confirm_hits = 3;               // >= 1
   int max_misses = 5;                 // >= 1
   double predict_ahead_s = 1.0;       // the predicted position reported with each track, >= 0
@@ -69,14 +87,20 @@ class Tracker {
                                  const std::vector<Detection>& detections);
 
  private:
+  using State = Eigen::Matrix<double, 5, 1>;
+  using Cov = Eigen::Matrix<double, 5, 5>;
   struct Track {
     int id;
-    Eigen::Vector4d x;
-    Eigen::Matrix4d P;
+    State x;  // px, pz, vx, vz (world), turn rate (rad/s, towards +x)
+    Cov P;
     int hits = 0, misses = 0, age = 0;
     bool confirmed = false;
   };
-  static void ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, Track* t);
+  Eigen::Vector2d Axis(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const;
+  Eigen::Matrix2d AccelCovariance(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const;
+  Cov ProcessNoise(const Eigen::Matrix2d& accel, double dt) const;
+  static State Predict(const State& x, double dt, Cov* F);
+  static void ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, double gate_chi2, Track* t);
   TrackerOptions options_;
   std::vector<Track> tracks_;
   int next_id_ = 1;
