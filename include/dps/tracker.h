@@ -1,18 +1,20 @@
 // dps — tracking obstacles over frames with a Kalman filter per object (seeds/004, section 4.3;
 // the first paper's wish for objects with position and velocity).
 //
-// State per track: position and ground velocity (px, pz, vx, vz) in a world frame that the ego
-// motion (CAN speed and yaw rate) carries the vehicle through, so that parked things stay put and
-// the velocity is over the ground. Constant-velocity motion with white acceleration noise. A
-// track follows one point of its object: its position measurement is the detection's ground
-// points near the track's prediction (averaged within local_radius_m), mapped into the world
-// through the ego pose (the measurement model is linear given the pose, so the extended filter
-// reduces to the plain one), with a standard deviation growing with range and with the
-// detection's extent; side detections add their motion-stereo velocity along the camera's
-// displacement as a scalar velocity measurement. Detections are assigned to tracks by the
-// Hungarian method on the Mahalanobis distance, within a chi-square gate. A track is born from an
-// unassigned detection, confirmed after `confirm_hits` hits and deleted after `max_misses`
-// frames without one.
+// State per track: position, ground velocity and turn rate (px, pz, vx, vz, w) in a world frame
+// that the ego motion (CAN speed and yaw rate) carries the vehicle through, so that parked things
+// stay put and the velocity is over the ground. An extended Kalman filter with a constant-turn
+// model (the velocity turns by w dt per step) and white acceleration noise, larger along the
+// track's axis (its velocity, or the road when it stands) than across it. A track follows one
+// point of its object: its position measurement is the detection's ground points near the
+// track's prediction (averaged within local_radius_m), mapped into the world through the ego pose,
+// with a standard deviation growing with range and with the detection's extent; when those points
+// are an end where the view cut the object (Detection::clipped_ends), the followed point may be
+// out of view beyond it and only the offset across the axis is measured. Side detections add
+// their motion-stereo velocity along the camera's displacement as a gated scalar measurement.
+// Detections are assigned to tracks by the Hungarian method on the Mahalanobis distance, within
+// a chi-square gate. A track is born from an unassigned detection, confirmed after
+// `confirm_hits` hits and deleted after `max_misses` frames without one.
 #pragma once
 
 #include <string>
