@@ -167,7 +167,9 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
                     out.detections.size());
       grid.Update(ego, pipeline.coverage(), out.detections);
-      const cv::Mat map = DrawFrameMap(map_background, grid, rig.vehicle, out.detections, frame_tracks, o.map, caption);
+      // The picture only when it is written (--no-video without PNGs: the CSVs alone).
+      cv::Mat map;
+      if (video.isOpened() || png) map = DrawFrameMap(map_background, grid, rig.vehicle, out.detections, frame_tracks, o.map, caption);
       for (const TrackState& t : frame_tracks) {
         if (t.confirmed) tracks.push_back(t);
       }
