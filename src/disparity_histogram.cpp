@@ -33,6 +33,7 @@ void HistogramOptions::Check() const {
   Require(link_max_depth_ratio >= 1, "link_max_depth_ratio", link_max_depth_ratio, ">= 1");
   Require(link_margin_px >= 0, "link_margin_px", link_margin_px, ">= 0");
   Require(link_max_see_through >= 0, "link_max_see_through", link_max_see_through, ">= 0");
+  Require(link_fit_columns >= 0, "link_fit_columns", link_fit_columns, ">= 0");
 }
 
 int HistogramOptions::bins() const {
@@ -168,6 +169,48 @@ float EndDisparity(const HistogramComponent& c, bool last) {
   return std::numeric_limits<float>::quiet_NaN();
 }
 
+// The line d = slope x + offset fitted (least squares) to the last (`last`) or first `n` columns of
+// a component with a centroid; false when fewer than 3 such columns.
+bool EndLine(const HistogramComponent& c, bool last, int n, double* slope, double* offset) {
+  const std::vector<float>& d = c.column_disparity;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int k = 0;
+  for (size_t i = 0; i < d.size() && k < n; ++i) {
+    const size_t at = last ? d.size() - 1 - i : i;
+    if (!std::isfinite(d[at])) continue;
+    const double x = c.x_begin + static_cast<double>(at);
+    sx += x, sy += d[at], sxx += x * x, sxy += x * d[at];
+    ++k;
+  }
+  const double det = k * sxx - sx * sx;
+  if (k < 3 || det <= 0) return false;
+  *slope = (k * sxy - sx * sy) / det;
+  *offset = (sy - *slope * sx) / k;
+  return true;
+}
+
+// Whether the ends of two components side by side lie on one planar surface: a plane's disparity
+// is linear along a row, so the line through one component's end columns, carried across the
+// gap, meets the other's end disparity (within link_margin_px or 10 %), one way or the other.
+// Components too short for a line pass.
+bool OnOneLine(const HistogramComponent& a, const HistogramComponent& b, float da, float db, const HistogramOptions& o) {
+  if (o.link_fit_columns == 0) return true;
+  double slope, offset;
+  bool fitted = false;
+  const auto agrees = [&](double predicted, double measured) {
+    return std::abs(predicted - measured) <= std::max(o.link_margin_px, 0.1 * measured);
+  };
+  if (EndLine(a, true, o.link_fit_columns, &slope, &offset)) {
+    fitted = true;
+    if (agrees(slope * b.x_begin + offset, db)) return true;
+  }
+  if (EndLine(b, false, o.link_fit_columns, &slope, &offset)) {
+    fitted = true;
+    if (agrees(slope * (a.x_end - 1) + offset, da)) return true;
+  }
+  return !fitted;
+}
+
 // Pixels in columns [x0, x1) that see something farther than the line from (x0 - 1, d0) to
 // (x1, d1): valid disparity below the line's by the margin, on rows where the road lies beyond it.
 int SeeThrough(const cv::Mat& disparity, const cv::Mat& road, int x0, int x1, float d0, float d1,
@@ -217,6 +260,7 @@ std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> c
       if (!std::isfinite(db) || db <= 0 || std::max(da, db) > o.link_max_depth_ratio * std::min(da, db)) break;
       if (allow && !allow(a.x_end - 1, da, b.x_begin, db)) break;
       if (SeeThrough(disparity, road, a.x_end, b.x_begin, da, db, o) > o.link_max_see_through) break;
+      if (!OnOneLine(a, b, da, db, o)) break;
       a.column_disparity.resize(b.x_begin - a.x_begin, kInvalidDisparity);
       a.column_disparity.insert(a.column_disparity.end(), b.column_disparity.begin(), b.column_disparity.end());
       a.x_end = b.x_end;

@@ -114,6 +114,31 @@ void TestLinking() {
     CHECK_EQ(dps::LinkComponents(parts, disp, road, o, nullptr, [](int, float, int, float) { return false; }).size(),
              size_t{2});
   }
+  // A pole (disparity 15, columns 36..41) beyond the end of a slanted surface (columns 46..100,
+  // disparity 20 falling to 14.6), columns 42..45 between them without texture: near in depth
+  // (ratio 1.33), nothing seen through the gap, but off the surface's plane (the surface's line
+  // gives 20.4 to 21 over the pole): not linked. The same pole at the disparity the line gives:
+  // linked.
+  for (const bool on_line : {false, true}) {
+    cv::Mat disp = road.clone();
+    for (int x = 36; x <= 100; ++x) {
+      const bool gap = x >= 42 && x <= 45;
+      const float d = x < 46 ? (on_line ? 20.0f + 0.1f * (46 - x) : 15.0f) : 20.0f - 0.1f * (x - 46);
+      for (int y = 5; y < 20 + 2 * d; ++y) disp.at<float>(y, x) = gap ? dps::kInvalidDisparity : d;
+    }
+    dps::HistogramOptions o;
+    o.max_disparity = 40;
+    o.link_max_gap = 20;
+    o.close_width = 1;  // keep the two apart in the histogram
+    const cv::Mat score = dps::ScoreImage(disp, road, o);
+    cv::Mat moments, labels;
+    const cv::Mat hist = dps::ColumnHistogram(disp, score, o, &moments);
+    const std::vector<dps::HistogramComponent> parts = dps::FindComponents(hist, o, &labels, moments);
+    CHECK_EQ(parts.size(), size_t{2});
+    CHECK_EQ(dps::LinkComponents(parts, disp, road, o, &labels).size(), on_line ? size_t{1} : size_t{2});
+    o.link_fit_columns = 0;  // without the plane test, linked either way
+    CHECK_EQ(dps::LinkComponents(parts, disp, road, o).size(), size_t{1});
+  }
 }
 
 void TestFrontProjection() {
