@@ -34,6 +34,7 @@ void HistogramOptions::Check() const {
   Require(link_margin_px >= 0, "link_margin_px", link_margin_px, ">= 0");
   Require(link_max_see_through >= 0, "link_max_see_through", link_max_see_through, ">= 0");
   Require(link_fit_columns >= 0, "link_fit_columns", link_fit_columns, ">= 0");
+  Require(link_line_max_gap >= 0, "link_line_max_gap", link_line_max_gap, ">= 0");
 }
 
 int HistogramOptions::bins() const {
@@ -169,44 +170,41 @@ float EndDisparity(const HistogramComponent& c, bool last) {
   return std::numeric_limits<float>::quiet_NaN();
 }
 
-// The line d = slope x + offset fitted (least squares) to the last (`last`) or first `n` columns of
-// a component with a centroid; false when fewer than 3 such columns.
-bool EndLine(const HistogramComponent& c, bool last, int n, double* slope, double* offset) {
+// The (column, disparity) pairs of the last (`last`) or first `n` columns of a component with a
+// centroid.
+std::vector<cv::Point2d> EndColumns(const HistogramComponent& c, bool last, int n) {
+  std::vector<cv::Point2d> out;
   const std::vector<float>& d = c.column_disparity;
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  int k = 0;
-  for (size_t i = 0; i < d.size() && k < n; ++i) {
+  for (size_t i = 0; i < d.size() && static_cast<int>(out.size()) < n; ++i) {
     const size_t at = last ? d.size() - 1 - i : i;
-    if (!std::isfinite(d[at])) continue;
-    const double x = c.x_begin + static_cast<double>(at);
-    sx += x, sy += d[at], sxx += x * x, sxy += x * d[at];
-    ++k;
+    if (std::isfinite(d[at])) out.emplace_back(c.x_begin + static_cast<double>(at), d[at]);
   }
-  const double det = k * sxx - sx * sx;
-  if (k < 3 || det <= 0) return false;
-  *slope = (k * sxy - sx * sy) / det;
-  *offset = (sy - *slope * sx) / k;
-  return true;
+  return out;
 }
 
-// Whether the ends of two components side by side lie on one planar surface: a plane's disparity
-// is linear along a row, so the line through one component's end columns, carried across the
-// gap, meets the other's end disparity (within link_margin_px or 10 %), one way or the other.
-// Components too short for a line pass.
-bool OnOneLine(const HistogramComponent& a, const HistogramComponent& b, float da, float db, const HistogramOptions& o) {
-  if (o.link_fit_columns == 0) return true;
-  double slope, offset;
+// Whether the ends of two components close side by side (at most link_line_max_gap columns
+// apart) continue one surface: they meet (their end disparities agree, as at a corner of a car),
+// or they lie on one plane — a plane's disparity is linear along a row, so the line fitted to
+// either part's columns (up to link_fit_columns from its end), carried across the gap, meets the
+// other part's end — within link_margin_px or 10 %. Parts with fewer than 3 such columns pass the
+// second test; parts further apart pass (a line carried across a long untextured stretch is too
+// uncertain to judge by).
+bool OnOneSurface(const HistogramComponent& a, const HistogramComponent& b, float da, float db,
+                  const HistogramOptions& o) {
+  if (o.link_fit_columns == 0 || b.x_begin - a.x_end > o.link_line_max_gap) return true;
+  const double tolerance = std::max(o.link_margin_px, 0.1 * std::min(da, db));
+  if (std::abs(da - db) <= tolerance) return true;
   bool fitted = false;
-  const auto agrees = [&](double predicted, double measured) {
-    return std::abs(predicted - measured) <= std::max(o.link_margin_px, 0.1 * measured);
-  };
-  if (EndLine(a, true, o.link_fit_columns, &slope, &offset)) {
+  for (const bool from_a : {true, false}) {
+    const std::vector<cv::Point2d> p = EndColumns(from_a ? a : b, from_a, o.link_fit_columns);
+    if (p.size() < 3) continue;
     fitted = true;
-    if (agrees(slope * b.x_begin + offset, db)) return true;
-  }
-  if (EndLine(b, false, o.link_fit_columns, &slope, &offset)) {
-    fitted = true;
-    if (agrees(slope * (a.x_end - 1) + offset, da)) return true;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (const cv::Point2d& q : p) sx += q.x, sy += q.y, sxx += q.x * q.x, sxy += q.x * q.y;
+    const double n = static_cast<double>(p.size());
+    const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx), offset = (sy - slope * sx) / n;
+    const double predicted = from_a ? slope * b.x_begin + offset : slope * (a.x_end - 1) + offset;
+    if (std::abs(predicted - (from_a ? db : da)) <= tolerance) return true;
   }
   return !fitted;
 }
@@ -260,7 +258,7 @@ std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> c
       if (!std::isfinite(db) || db <= 0 || std::max(da, db) > o.link_max_depth_ratio * std::min(da, db)) break;
       if (allow && !allow(a.x_end - 1, da, b.x_begin, db)) break;
       if (SeeThrough(disparity, road, a.x_end, b.x_begin, da, db, o) > o.link_max_see_through) break;
-      if (!OnOneLine(a, b, da, db, o)) break;
+      if (!OnOneSurface(a, b, da, db, o)) break;
       a.column_disparity.resize(b.x_begin - a.x_begin, kInvalidDisparity);
       a.column_disparity.insert(a.column_disparity.end(), b.column_disparity.begin(), b.column_disparity.end());
       a.x_end = b.x_end;

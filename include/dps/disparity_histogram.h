@@ -42,9 +42,11 @@ struct HistogramOptions {
   double link_max_depth_ratio = 1.6;
   double link_margin_px = 2.0;
   int link_max_see_through = 5;
-  // ... and whose ends lie on one plane: the line through either's last link_fit_columns
-  // column disparities, carried across the gap, meets the other's end (0 = no such test).
+  // ... and, when at most link_line_max_gap columns apart, whose ends meet or lie on one plane:
+  // the line through either's link_fit_columns end column disparities, carried across the gap,
+  // meets the other's end (link_fit_columns = 0: no such test).
   int link_fit_columns = 12;
+  int link_line_max_gap = 4;
 
   // Throws dps::Error naming the field and the violated constraint.
   void Check() const;
