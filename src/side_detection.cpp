@@ -102,6 +102,9 @@ SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = true;
   options_.histogram.Check();
+  if (options.contact_trim_rows < 0) {
+    throw Error(Str("side detector option contact_trim_rows = ", options.contact_trim_rows, ": violated constraint >= 0"));
+  }
   matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
 }
 
@@ -228,8 +231,12 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
       Contact k;
       k.x = x;
       k.y = lowest;
-      k.ground = Eigen::Vector2d(g.x(), g.z());
+      // Depth and disparity of the lowest matched pixel (for the motion); the contact with the
+      // road, placed on the map, contact_trim_rows higher (vertical fattening).
       k.depth = ViewDepth(reference, g);
+      const int contact = std::max(0, lowest - options_.contact_trim_rows);
+      if (contact != lowest && !PixelToGround(reference, x, contact, &g)) continue;
+      k.ground = Eigen::Vector2d(g.x(), g.z());
       k.disparity = disparity;
       k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
       contacts.push_back(k);

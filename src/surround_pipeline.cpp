@@ -29,6 +29,7 @@ PipelineOptions DefaultPipelineOptions(const Rig& rig) {
     st->block_width = st->block_height = block;
   }
   o.side.stereo.min_disparity = -(d * 5) / 12;  // -40 of 96
+  o.side.contact_trim_rows = block >= 9 ? 2 : 0;  // side_detection.h
   o.front.view_width = o.side.view_width = w;
   o.front.view_height = o.side.view_height = h;
   o.front.focal_px = o.side.focal_px = 170.0 * s;
