@@ -178,8 +178,8 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   // track is the detection's ground point nearest to the track's prediction (a new track starts
   // at the detection's nearest point to the vehicle). The nearest point to the vehicle alone
   // would slide along the object as other parts come into view (passing a parked car it moves
-  // with us). What is left of the sliding (the followed point leaving the view) is covered by an
-  // uncertainty of a fraction of the detection's extent.
+  // with us). The followed point leaving the view is handled by the cut ends (below); what is
+  // left of the sliding is covered by an uncertainty of a fraction of the detection's extent.
   std::vector<Eigen::Vector2d> z;
   std::vector<std::vector<Eigen::Vector2d>> points(detections.size()), clipped_ends(detections.size());
   std::vector<Eigen::Matrix2d> R;
@@ -229,7 +229,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     return m;
   };
   // measured[i][j]: detection j's followed point for track i (for the cost and the update);
-  // across[i][j]: the unit vector across track i's axis when only that offset is measured, else 0.
+  // across[i]: the unit vector across track i's axis (what a cut end measures).
   std::vector<std::vector<Measured>> measured(tracks_.size(), std::vector<Measured>(z.size()));
   std::vector<Eigen::Vector2d> across(tracks_.size());
   for (size_t i = 0; i < tracks_.size(); ++i) {
