@@ -110,8 +110,48 @@ std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double m
   return out;
 }
 
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Whether the source at `viewpoint` saw through the stretch between two of its parts: along the
+// segment joining their closest points, at least two of five samples have a point of the same
+// source behind them on the same bearing (within 0.01 rad, farther by more than 0.5 m) — the
+// stretch is free space, not an unseen part of one surface.
+bool SeenBetween(const Detection& a, const Detection& b, const std::vector<Detection>& all,
+                 const Eigen::Vector2d& viewpoint) {
+  Eigen::Vector2d pa = a.points.front(), pb = b.points.front();
+  for (const Eigen::Vector2d& p : a.points) {
+    for (const Eigen::Vector2d& q : b.points) {
+      if ((p - q).squaredNorm() < (pa - pb).squaredNorm()) pa = p, pb = q;
+    }
+  }
+  int seen = 0;
+  for (int k = 1; k <= 5; ++k) {
+    const Eigen::Vector2d s = pa + (pb - pa) * (k / 6.0) - viewpoint;
+    const double bearing = std::atan2(s.x(), s.y()), range = s.norm();
+    bool behind = false;
+    for (const Detection& e : all) {
+      if (e.source != a.source) continue;
+      for (const Eigen::Vector2d& p : e.points) {
+        const Eigen::Vector2d r = p - viewpoint;
+        if (r.norm() > range + 0.5 && std::abs(std::remainder(std::atan2(r.x(), r.y()) - bearing, 2 * kPi)) <= 0.01) {
+          behind = true;
+          break;
+        }
+      }
+      if (behind) break;
+    }
+    seen += behind;
+  }
+  return seen >= 3;
+}
+
+}  // namespace
+
 std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_length_m, double max_width_m,
-                                         bool across_sources_only) {
+                                         bool across_sources_only,
+                                         const std::map<std::string, Eigen::Vector2d>& viewpoints) {
   for (Detection& e : d) e.points = PointsOf(e);
   for (;;) {
     size_t bi = 0, bj = 0;
@@ -125,11 +165,14 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
         }
         const cv::RotatedRect box = cv::minAreaRect(points);
         const double length = std::max(box.size.width, box.size.height), width = std::min(box.size.width, box.size.height);
-        if (length <= max_length_m && width <= max_width_m && length < best) {
-          best = length;
-          bi = i;
-          bj = j;
+        if (length > max_length_m || width > max_width_m || length >= best) continue;
+        const auto viewpoint = viewpoints.find(d[i].source);
+        if (d[i].source == d[j].source && viewpoint != viewpoints.end() && SeenBetween(d[i], d[j], d, viewpoint->second)) {
+          continue;
         }
+        best = length;
+        bi = i;
+        bj = j;
       }
     }
     if (!std::isfinite(best)) break;

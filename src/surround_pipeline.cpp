@@ -54,6 +54,8 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
 
 SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& options)
     : rig_(rig), options_(options), coverage_(PipelineCoverage(rig, options)) {
+  // Where each source looks from (the sectors' apexes), for MergeVehicleParts' see-through test.
+  for (const Sector& s : coverage_.sectors) viewpoints_[s.name] = s.apex;
   front_ = std::make_unique<FrontDetector>(rig, options.front);
   if (options.sides) {
     left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
@@ -97,7 +99,7 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in) {
   out.detections = FuseDetections(out.detections, options_.merge_distance_m);
   if (options_.vehicle_length_m > 0) {
     out.detections = MergeVehicleParts(std::move(out.detections), options_.vehicle_length_m,
-                                       options_.vehicle_width_m, options_.vehicle_across_sources_only);
+                                       options_.vehicle_width_m, options_.vehicle_across_sources_only, viewpoints_);
   }
   return out;
 }

@@ -2,6 +2,7 @@
 // the front projection against hand-computed points, fusion of parts, the scoring rules of
 // DESIGN.md §5 on hand-made cases, and front detection on rendered drives with known truth.
 #include <cmath>
+#include <map>
 #include <cstdio>
 
 #include "check.h"
@@ -205,6 +206,19 @@ void TestFusion() {
   // vehicle keeps the side and the back apart.
   CHECK_EQ(dps::MergeVehicleParts(parts, 5.0, 2.2, true).size(), size_t{2});
   CHECK_EQ(dps::MergeVehicleParts(parts, 3.5, 2.2, false).size(), size_t{3});
+  // Two front parts of one car's side (x = 2.5, z 4..6 and 7.5..9; the stretch between without
+  // texture) fit one 5 m footprint and are merged. Seen from the front pair at (0, 0.9), the
+  // stretch is a gap between two objects when the pair saw something behind it on the same
+  // bearings (a wall at x = 5): then kept apart — unless no viewpoints are given.
+  const dps::Detection near_part = line(2.5, 4.0, 2.5, 6.0, "front"), far_part = line(2.5, 7.5, 2.5, 9.0, "front");
+  const std::map<std::string, Eigen::Vector2d> viewpoints = {{"front", Eigen::Vector2d(0, 0.9)}};
+  CHECK_EQ(dps::MergeVehicleParts({near_part, far_part}, 5.0, 2.2, false, viewpoints).size(), size_t{1});
+  std::vector<Eigen::Vector2d> wall;
+  for (double z = 8.0; z <= 16.0; z += 0.02) wall.emplace_back(5.0, z);
+  dps::Detection behind = dps::DetectionFromPoints(wall, "front");
+  behind.frame = 7;
+  CHECK_EQ(dps::MergeVehicleParts({near_part, far_part, behind}, 5.0, 2.2, false, viewpoints).size(), size_t{3});
+  CHECK_EQ(dps::MergeVehicleParts({near_part, far_part, behind}, 5.0, 2.2, false).size(), size_t{2});
 }
 
 void TestEvaluation() {

@@ -5,6 +5,7 @@
 // origin (x, z), the range of that point, the extent of all points and their number.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -49,8 +50,11 @@ std::vector<Detection> FuseDetections(const std::vector<Detection>& detections, 
 // smallest union first, until no pair fits: a car seen partly by a side camera and partly by the
 // front pair, with the stretch between unseen. `across_sources_only`: only parts from different
 // sources. Ids are renumbered per source.
+// `viewpoints` (optional, by source): two parts of one source are not merged when that source
+// saw through the stretch between them (points of the source behind it on the same bearings).
 std::vector<Detection> MergeVehicleParts(std::vector<Detection> detections, double max_length_m, double max_width_m,
-                                         bool across_sources_only);
+                                         bool across_sources_only,
+                                         const std::map<std::string, Eigen::Vector2d>& viewpoints = {});
 
 // detections.csv: header and one row per detection, written atomically. Throws dps::Error.
 void WriteDetections(const std::vector<Detection>& detections, const std::string& path);

@@ -3,6 +3,7 @@
 // ground plane of the current vehicle frame.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -71,6 +72,7 @@ class SurroundPipeline {
   Rig rig_;
   PipelineOptions options_;
   Coverage coverage_;
+  std::map<std::string, Eigen::Vector2d> viewpoints_;
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<SideDetector> left_, right_;
   cv::Mat previous_left_, previous_right_;
