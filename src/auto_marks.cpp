@@ -16,10 +16,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-void Require(bool ok, const char* field, double value, const char* constraint) {
-  if (!ok) throw Error(Str("auto-mark option ", field, " = ", value, ": violated constraint ", constraint));
-}
-
 // A paint pixel: where it is in the image, its ray (camera frame) and where that ray meets the
 // road, relative to the camera's footprint (nominal geometry).
 struct Paint {
@@ -137,6 +133,7 @@ GroundLine FitLine(const std::vector<Eigen::Vector2d>& points, const GroundLine&
 }  // namespace
 
 void AutoMarkOptions::Check() const {
+  const OptionCheck Require("auto-mark");
   Require(tophat_px >= 3 && tophat_px % 2 == 1, "tophat_px", tophat_px, "odd, >= 3");
   Require(tophat_threshold > 0, "tophat_threshold", tophat_threshold, "> 0");
   Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");

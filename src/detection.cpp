@@ -112,14 +112,18 @@ std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double m
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+// What one source saw, as (bearing from its viewpoint, range) of its points, sorted by bearing.
+struct Sightings {
+  Eigen::Vector2d viewpoint;
+  std::vector<std::pair<double, double>> seen;
+};
 
-// Whether the source at `viewpoint` saw through the stretch between two of its parts: along the
-// segment joining their closest points, at least two of five samples have a point of the same
-// source behind them on the same bearing (within 0.01 rad, farther by more than 0.5 m) — the
-// stretch is free space, not an unseen part of one surface.
-bool SeenBetween(const Detection& a, const Detection& b, const std::vector<Detection>& all,
-                 const Eigen::Vector2d& viewpoint) {
+// Whether a source saw through the stretch between two parts: along the segment joining their
+// closest points, at least three of five samples have a point of the source behind them on the
+// same bearing (within 0.01 rad, farther by more than 0.5 m) — the stretch is free space, not an
+// unseen part of one surface. Bearings are atan2(x, z) without wrapping (no view looks straight
+// back).
+bool SeenBetween(const Detection& a, const Detection& b, const Sightings& source) {
   Eigen::Vector2d pa = a.points.front(), pb = b.points.front();
   for (const Eigen::Vector2d& p : a.points) {
     for (const Eigen::Vector2d& q : b.points) {
@@ -128,21 +132,15 @@ bool SeenBetween(const Detection& a, const Detection& b, const std::vector<Detec
   }
   int seen = 0;
   for (int k = 1; k <= 5; ++k) {
-    const Eigen::Vector2d s = pa + (pb - pa) * (k / 6.0) - viewpoint;
+    const Eigen::Vector2d s = pa + (pb - pa) * (k / 6.0) - source.viewpoint;
     const double bearing = std::atan2(s.x(), s.y()), range = s.norm();
-    bool behind = false;
-    for (const Detection& e : all) {
-      if (e.source != a.source) continue;
-      for (const Eigen::Vector2d& p : e.points) {
-        const Eigen::Vector2d r = p - viewpoint;
-        if (r.norm() > range + 0.5 && std::abs(std::remainder(std::atan2(r.x(), r.y()) - bearing, 2 * kPi)) <= 0.01) {
-          behind = true;
-          break;
-        }
+    auto it = std::lower_bound(source.seen.begin(), source.seen.end(), std::make_pair(bearing - 0.01, 0.0));
+    for (; it != source.seen.end() && it->first <= bearing + 0.01; ++it) {
+      if (it->second > range + 0.5) {
+        ++seen;
+        break;
       }
-      if (behind) break;
     }
-    seen += behind;
   }
   return seen >= 3;
 }
@@ -153,6 +151,20 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
                                          bool across_sources_only,
                                          const std::map<std::string, Eigen::Vector2d>& viewpoints) {
   for (Detection& e : d) e.points = PointsOf(e);
+  // Each source's sightings, once: merging only regroups the points.
+  std::map<std::string, Sightings> sightings;
+  for (const auto& [source, viewpoint] : viewpoints) {
+    Sightings& v = sightings[source];
+    v.viewpoint = viewpoint;
+    for (const Detection& e : d) {
+      if (e.source != source) continue;
+      for (const Eigen::Vector2d& p : e.points) {
+        const Eigen::Vector2d r = p - viewpoint;
+        v.seen.emplace_back(std::atan2(r.x(), r.y()), r.norm());
+      }
+    }
+    std::sort(v.seen.begin(), v.seen.end());
+  }
   for (;;) {
     size_t bi = 0, bj = 0;
     double best = std::numeric_limits<double>::infinity();
@@ -166,10 +178,8 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
         const cv::RotatedRect box = cv::minAreaRect(points);
         const double length = std::max(box.size.width, box.size.height), width = std::min(box.size.width, box.size.height);
         if (length > max_length_m || width > max_width_m || length >= best) continue;
-        const auto viewpoint = viewpoints.find(d[i].source);
-        if (d[i].source == d[j].source && viewpoint != viewpoints.end() && SeenBetween(d[i], d[j], d, viewpoint->second)) {
-          continue;
-        }
+        const auto source = sightings.find(d[i].source);
+        if (d[i].source == d[j].source && source != sightings.end() && SeenBetween(d[i], d[j], source->second)) continue;
         best = length;
         bi = i;
         bj = j;

@@ -11,15 +11,8 @@
 #include "dps/sad_stereo.h"
 
 namespace dps {
-namespace {
-
-void Require(bool ok, const char* field, double value, const char* constraint) {
-  if (!ok) throw Error(Str("histogram option ", field, " = ", value, ": violated constraint ", constraint));
-}
-
-}  // namespace
-
 void HistogramOptions::Check() const {
+  const OptionCheck Require("histogram");
   Require(max_disparity > min_disparity, "max_disparity", max_disparity, "> min_disparity");
   Require(bin_px > 0, "bin_px", bin_px, "> 0");
   Require(score_ramp_px > 0, "score_ramp_px", score_ramp_px, "> 0");

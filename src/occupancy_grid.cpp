@@ -14,13 +14,10 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-void Require(bool ok, const char* field, double value, const char* constraint) {
-  if (!ok) throw Error(Str("occupancy option ", field, " = ", value, ": violated constraint ", constraint));
-}
-
 }  // namespace
 
 void OccupancyOptions::Check() const {
+  const OptionCheck Require("occupancy");
   Require(cell_m > 0, "cell_m", cell_m, "> 0");
   Require(cells >= 16, "cells", cells, ">= 16");
   Require(bearing_step_deg > 0, "bearing_step_deg", bearing_step_deg, "> 0");

@@ -17,10 +17,6 @@
 namespace dps {
 namespace {
 
-void Require(bool ok, const char* field, double value, const char* constraint) {
-  if (!ok) throw Error(Str("stereo option ", field, " = ", value, ": violated constraint ", constraint));
-}
-
 cv::Mat ToGrey(const cv::Mat& image, const char* which) {
   if (image.empty()) throw Error(Str("stereo: the ", which, " image is empty"));
   if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
@@ -87,6 +83,7 @@ const SadKernel& BestSadKernel() {
 }  // namespace internal
 
 void StereoOptions::Check() const {
+  const OptionCheck Require("stereo");
   Require(num_disparities >= 2, "num_disparities", num_disparities, ">= 2");
   Require(block_width % 2 == 1 && block_width >= 3 && block_width <= 31, "block_width", block_width,
           "odd and 3..31");

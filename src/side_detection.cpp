@@ -102,9 +102,7 @@ SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = true;
   options_.histogram.Check();
-  if (options.contact_trim_rows < 0) {
-    throw Error(Str("side detector option contact_trim_rows = ", options.contact_trim_rows, ": violated constraint >= 0"));
-  }
+  OptionCheck("side detector")(options.contact_trim_rows >= 0, "contact_trim_rows", options.contact_trim_rows, ">= 0");
   matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
 }
 

@@ -12,14 +12,6 @@
 #include "dps/error.h"
 
 namespace dps {
-namespace {
-
-void Require(bool ok, const char* field, double value, const char* constraint) {
-  if (!ok) throw Error(Str("tracker option ", field, " = ", value, ": violated constraint ", constraint));
-}
-
-}  // namespace
-
 // A detection's velocity along one direction (motion stereo, Detection::has_motion) updates the
 // track's velocity in that direction: H = [0 0 u], one scalar measurement, unless it lies outside
 // the gate (motion stereo of a part that moves differently, e.g. the background at a car's end).
@@ -37,6 +29,7 @@ void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_
 }
 
 void TrackerOptions::Check() const {
+  const OptionCheck Require("tracker");
   Require(accel_sigma_mps2 > 0, "accel_sigma_mps2", accel_sigma_mps2, "> 0");
   Require(across_accel_sigma_mps2 > 0, "across_accel_sigma_mps2", across_accel_sigma_mps2, "> 0");
   Require(turn_accel_sigma_radps2 >= 0, "turn_accel_sigma_radps2", turn_accel_sigma_radps2, ">= 0");

@@ -27,4 +27,18 @@ std::string Str(Args&&... args) {
   return out.str();
 }
 
+// The check of an options struct's fields, for its Check(): `const OptionCheck Require("tracker");`
+// then Require(ok, "field", value, "constraint") throws Error("tracker option field = value:
+// violated constraint constraint") unless ok.
+class OptionCheck {
+ public:
+  explicit OptionCheck(const char* what) : what_(what) {}
+  void operator()(bool ok, const char* field, double value, const char* constraint) const {
+    if (!ok) throw Error(Str(what_, " option ", field, " = ", value, ": violated constraint ", constraint));
+  }
+
+ private:
+  const char* what_;
+};
+
 }  // namespace dps
