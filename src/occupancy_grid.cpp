@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
+#include <vector>
 
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -13,6 +17,8 @@ namespace dps {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// The map's colours for the grid (BGR): occupied cells grey, free ones light green.
+constexpr int kOccupiedGrey = 90, kFreeBlueRed = 215, kFreeGreen = 240;
 
 }  // namespace
 
@@ -64,12 +70,12 @@ double OccupancyGrid::AtVehicle(const Eigen::Vector2d& v) const { return At(Body
 void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, const std::vector<Detection>& detections) {
   pose_ = pose;
   Recentre({pose.x_m, pose.z_m});
-  sum_ *= options_.decay;
   // This frame's evidence per cell: occupied wins over free; each cell counts once per frame.
   // The free part of every sector is one fan polygon (the apex and each bearing's free end),
-  // filled at once; the occupied evidence is walked along the bearings that hit something.
-  cv::Mat delta(sum_.size(), CV_32F, cv::Scalar(0));
-  cv::Mat free(sum_.size(), CV_8U, cv::Scalar(0));
+  // filled at once with the free weight; then the occupied evidence is walked along the bearings
+  // that hit something, each cell keeping the largest weight.
+  delta_.create(sum_.size(), CV_32F);
+  delta_.setTo(0);
   const Eigen::Matrix2d rotation = BodyToWorldRotation(pose);  // one transform per bearing
   const auto cell_of = [&](const Eigen::Vector2d& w) { return Eigen::Vector2d((w - origin_) / options_.cell_m); };
   constexpr int kShift = 4;  // fillPoly's fractional bits
@@ -81,23 +87,28 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
     const Eigen::Vector2d c = cell_of(w);
     const int col = static_cast<int>(std::floor(c.x())), row = static_cast<int>(std::floor(c.y()));
     if (col < 0 || row < 0 || col >= options_.cells || row >= options_.cells) return;
-    float& d = delta.at<float>(row, col);
+    float& d = delta_.at<float>(row, col);
     d = std::max(d, static_cast<float>(weight));
   };
+  struct Hit {
+    Eigen::Vector2d apex, dir;
+    double range, sigma;
+  };
+  std::vector<Hit> hits;
   const double step_rad = options_.bearing_step_deg * kPi / 180;
-  const double walk = options_.cell_m / 2;
   for (const Sector& s : coverage.sectors) {
     const int bins = std::max(1, static_cast<int>(std::ceil(2 * s.half_angle_rad / step_rad)));
     std::vector<double> nearest(bins, std::numeric_limits<double>::infinity());
+    const auto see = [&](const Eigen::Vector2d& p) {
+      const Eigen::Vector2d rel = p - s.apex;
+      const double a = std::remainder(std::atan2(rel.x(), rel.y()) - s.direction_rad, 2 * kPi);
+      if (std::abs(a) > s.half_angle_rad) return;
+      const int b = std::clamp(static_cast<int>((a + s.half_angle_rad) / step_rad), 0, bins - 1);
+      nearest[b] = std::min(nearest[b], rel.norm());
+    };
     for (const Detection& d : detections) {
-      const std::vector<Eigen::Vector2d> pts = d.points.empty() ? std::vector<Eigen::Vector2d>{{d.x_m, d.z_m}} : d.points;
-      for (const Eigen::Vector2d& p : pts) {
-        const Eigen::Vector2d rel = p - s.apex;
-        const double a = std::remainder(std::atan2(rel.x(), rel.y()) - s.direction_rad, 2 * kPi);
-        if (std::abs(a) > s.half_angle_rad) continue;
-        const int b = std::clamp(static_cast<int>((a + s.half_angle_rad) / step_rad), 0, bins - 1);
-        nearest[b] = std::min(nearest[b], rel.norm());
-      }
+      if (d.points.empty()) see({d.x_m, d.z_m});
+      for (const Eigen::Vector2d& p : d.points) see(p);
     }
     const Eigen::Vector2d apex = BodyToWorld(pose, s.apex);
     std::vector<cv::Point> fan{vertex(apex)};
@@ -108,21 +119,25 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
       const double sigma = std::isfinite(r) ? options_.sigma0_m + options_.sigma_per_m2 * r * r : 0.0;
       const double free_end = std::isfinite(r) ? std::max(0.0, r - 2 * sigma) : options_.free_range_m;
       fan.push_back(vertex(apex + std::min(free_end, options_.free_range_m) * dir));
-      if (!std::isfinite(r)) continue;
-      for (double t = std::max(walk, r - 2 * sigma); t <= r + options_.thickness_m; t += walk) {
-        const double w = t < r ? options_.occupied_weight * std::exp(-0.5 * std::pow((t - r) / sigma, 2))
-                               : options_.occupied_weight;
-        occupy(apex + t * dir, w);
-      }
+      if (std::isfinite(r)) hits.push_back({apex, dir, r, sigma});
     }
-    cv::fillPoly(free, std::vector<std::vector<cv::Point>>{fan}, cv::Scalar(255), cv::LINE_8, kShift);
+    cv::fillPoly(delta_, std::vector<std::vector<cv::Point>>{fan}, cv::Scalar(options_.free_weight), cv::LINE_8, kShift);
   }
-  cv::Mat unoccupied = delta <= 0;
-  cv::bitwise_and(free, unoccupied, free);
-  delta.setTo(options_.free_weight, free);
-  sum_ += delta;
-  cv::min(sum_, options_.clamp, sum_);
-  cv::max(sum_, -options_.clamp, sum_);
+  const double walk = options_.cell_m / 2;
+  for (const Hit& h : hits) {
+    for (double t = std::max(walk, h.range - 2 * h.sigma); t <= h.range + options_.thickness_m; t += walk) {
+      const double w = t < h.range ? options_.occupied_weight * std::exp(-0.5 * std::pow((t - h.range) / h.sigma, 2))
+                                   : options_.occupied_weight;
+      occupy(h.apex + t * h.dir, w);
+    }
+  }
+  // Decay, this frame's evidence, clamp: one pass.
+  const float decay = static_cast<float>(options_.decay), clamp = static_cast<float>(options_.clamp);
+  for (int row = 0; row < sum_.rows; ++row) {
+    float* sum = sum_.ptr<float>(row);
+    const float* evidence = delta_.ptr<float>(row);
+    for (int col = 0; col < sum_.cols; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + evidence[col]));
+  }
 }
 
 std::vector<Eigen::Vector2d> OccupancyGrid::ObstacleCells() const {
@@ -150,26 +165,81 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
   const double bx = (pose_.x_m - origin_.x()) / options_.cell_m - 0.5, bz = (pose_.z_m - origin_.y()) / options_.cell_m - 0.5;
   const cv::Matx23d M(c * k, -s * k, bx - c * k * u0 + s * k * v0,
                       -s * k, -c * k, bz + s * k * u0 + c * k * v0);
+  // A cell spans `block` map pixels or more: resample one pixel per block x block square (at its
+  // centre), which costs block^2 times less than every pixel and shows the same cells.
+  const int block = std::max(1, static_cast<int>(std::floor(1.0 / k + 1e-9)));
+  const double half = (block - 1) / 2.0;
+  const cv::Matx23d B(M(0, 0) * block, M(0, 1) * block, M(0, 2) + (M(0, 0) + M(0, 1)) * half,
+                      M(1, 0) * block, M(1, 1) * block, M(1, 2) + (M(1, 0) + M(1, 1)) * half);
+  const cv::Size blocks((map.cols + block - 1) / block, (map.rows + block - 1) / block);
   // The evidence as 8 bits (128 = unknown, 1 / 255 = clamped free / occupied) resamples fast.
   cv::Mat quantised, level;
   sum_.convertTo(quantised, CV_8U, 127.0 / options_.clamp, 128.0);
-  cv::warpAffine(quantised, level, M, map.size(), cv::INTER_NEAREST | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT,
+  cv::warpAffine(quantised, level, B, blocks, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT,
                  cv::Scalar(128));
-  // Blend towards grey (occupied) or light green (free) by |evidence| / clamp, in 1/256 steps.
-  int weight[256];
-  for (int q = 0; q < 256; ++q) weight[q] = std::min(256, std::abs(q - 128) * 256 / 127);
+  // Blend towards grey (occupied) or light green (free) by |evidence| / clamp, in 1/128 steps:
+  // pixel += (target - pixel) * |level - 128| / 128 (unknown cells, level 128, leave it as it is).
   cv::parallel_for_(cv::Range(0, map.rows), [&](const cv::Range& rows) {
+    const int n = block, cols = map.cols;
+    std::vector<std::uint8_t> expanded(n > 1 ? level.cols * n : 0);
+    int expanded_row = -1;
     for (int v = rows.start; v < rows.end; ++v) {
-      const std::uint8_t* e = level.ptr<std::uint8_t>(v);
+      const std::uint8_t* e = level.ptr<std::uint8_t>(v / n);
+      if (n > 1) {  // each block's level repeated over its n columns, once per n rows
+        std::uint8_t* out = expanded.data();
+        if (expanded_row != v / n) {
+          expanded_row = v / n;
+          int b = 0;
+#if CV_SIMD
+          for (; n == 2 && b + cv::v_uint8::nlanes <= level.cols; b += cv::v_uint8::nlanes) {
+            cv::v_uint8 lo, hi;
+            const cv::v_uint8 x = cv::vx_load(e + b);
+            cv::v_zip(x, x, lo, hi);
+            cv::v_store(out + 2 * b, lo);
+            cv::v_store(out + 2 * b + cv::v_uint8::nlanes, hi);
+          }
+#endif
+          for (; b < level.cols; ++b) std::memset(out + b * n, e[b], n);
+        }
+        e = out;
+      }
       std::uint8_t* px = map.ptr<std::uint8_t>(v);
-      for (int u = 0; u < map.cols; ++u, px += 3) {
-        if (e[u] == 128) continue;
-        const int a = weight[e[u]];
+      int u = 0;
+#if CV_SIMD
+      const cv::v_int16 mid = cv::vx_setall_s16(128), grey = cv::vx_setall_s16(kOccupiedGrey);
+      const cv::v_int16 free_bg = cv::vx_setall_s16(kFreeBlueRed), free_g = cv::vx_setall_s16(kFreeGreen);
+      // One half of a register of pixels: the channel p (8 bits widened) towards its target.
+      const auto blend = [&](const cv::v_uint16& level16, const cv::v_uint16& p16, const cv::v_int16& free_target) {
+        const cv::v_int16 signed_level = cv::v_reinterpret_as_s16(level16) - mid;
+        const cv::v_int16 weight = cv::v_reinterpret_as_s16(cv::v_abs(signed_level));
+        const cv::v_int16 target = cv::v_select(signed_level > cv::vx_setzero_s16(), grey, free_target);
+        const cv::v_int16 p = cv::v_reinterpret_as_s16(p16);
+        return p + (cv::v_mul_wrap(target - p, weight) >> 7);
+      };
+      const auto channel = [&](const cv::v_uint16& e0, const cv::v_uint16& e1, const cv::v_uint8& c,
+                               const cv::v_int16& free_target) {
+        cv::v_uint16 c0, c1;
+        cv::v_expand(c, c0, c1);
+        return cv::v_pack_u(blend(e0, c0, free_target), blend(e1, c1, free_target));
+      };
+      for (; u + cv::v_uint8::nlanes <= map.cols; u += cv::v_uint8::nlanes) {
+        cv::v_uint16 e0, e1;
+        cv::v_expand(cv::vx_load(e + u), e0, e1);
+        cv::v_uint8 b, g, r;
+        cv::v_load_deinterleave(px + 3 * u, b, g, r);
+        cv::v_store_interleave(px + 3 * u, channel(e0, e1, b, free_bg), channel(e0, e1, g, free_g),
+                               channel(e0, e1, r, free_bg));
+      }
+#endif
+      for (; u < map.cols; ++u) {
+        const int a = std::abs(e[u] - 128);
         const bool occupied = e[u] > 128;
-        const int t0 = occupied ? 90 : 215, t1 = occupied ? 90 : 240, t2 = occupied ? 90 : 215;
-        px[0] = static_cast<std::uint8_t>(px[0] + (((t0 - px[0]) * a) >> 8));
-        px[1] = static_cast<std::uint8_t>(px[1] + (((t1 - px[1]) * a) >> 8));
-        px[2] = static_cast<std::uint8_t>(px[2] + (((t2 - px[2]) * a) >> 8));
+        const int targets[3] = {occupied ? kOccupiedGrey : kFreeBlueRed, occupied ? kOccupiedGrey : kFreeGreen,
+                                occupied ? kOccupiedGrey : kFreeBlueRed};
+        for (int k = 0; k < 3; ++k) {
+          std::uint8_t& c = px[3 * u + k];
+          c = static_cast<std::uint8_t>(c + (((targets[k] - c) * a) >> 7));
+        }
       }
     }
   });

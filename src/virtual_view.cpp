@@ -90,7 +90,12 @@ VirtualView::VirtualView(const RigCamera& camera, const ViewSpec& spec)
       }
     }
   });
-  cv::convertMaps(map_float_, cv::Mat(), map1_, map2_, CV_16SC2);
+  // For cv::remap, pixels that see nothing point well outside the image: it fills those with the
+  // border value at once, while points within a pixel of the image (such as (-1, -1)) take its
+  // slow path that interpolates the border for every neighbour.
+  cv::Mat remap_table = map_float_.clone();
+  remap_table.setTo(cv::Scalar(-16, -16), mask_ == 0);
+  cv::convertMaps(remap_table, cv::Mat(), map1_, map2_, CV_16SC2);
 }
 
 cv::Mat VirtualView::Render(const cv::Mat& omni) const {

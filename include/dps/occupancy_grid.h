@@ -64,6 +64,7 @@ class OccupancyGrid {
   void Recentre(const Eigen::Vector2d& world);
   OccupancyOptions options_;
   cv::Mat sum_;                       // CV_32F evidence
+  cv::Mat delta_;                     // CV_32F, one frame's evidence (kept to save its allocation)
   Eigen::Vector2d origin_{0, 0};      // world (x, z) of cell (0, 0)'s corner
   PlanarPose pose_;                   // the latest vehicle pose
 };
