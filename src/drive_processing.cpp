@@ -128,41 +128,11 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     const std::string diagnostics_tmp = (tmp / ".diagnostics.tmp.avi").string();
     if (png) fs::create_directories(tmp / "map");
     double decode = 0, front = 0, sides = 0, map_s = 0, write = 0;
-    cv::Mat l, r;
-    for (int f = 0; f < frames; ++f) {
-      auto t0 = Clock::now();
-      if (!left->Read(&l) || !right->Read(&r)) {
-        throw Error(Str(drive_dir, ": frame ", f, " could not be read (the stream ended early)"));
-      }
-      if (l.size() != r.size()) {
-        throw Error(Str(drive_dir, ": frame ", f, ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
-      }
-      if (l.cols != rig.Camera("left").model.width() || l.rows != rig.Camera("left").model.height()) {
-        throw Error(Str(drive_dir, ": frame ", f, " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
-                        rig.Camera("left").model.width(), "x", rig.Camera("left").model.height()));
-      }
-      auto t1 = Clock::now();
-      decode += Seconds(t0, t1);
-      FrameInput in;
-      in.frame = f;
-      in.t_s = times[f];
-      in.left = l;
-      in.right = r;
-      if (f > 0) {
-        std::string why;
-        in.motion_known = MotionBetween(can, times[f - 1], times[f], &in.current_in_previous, &why);
-        if (!in.motion_known) {
-          ++s.frames_without_motion;
-          s.warnings.push_back(Str("frame ", f, ": no known motion (", why, "); side detection skipped"));
-        }
-      }
-      FrameOutput out = pipeline.Process(in);
-      if (in.motion_known) ego = Compose(ego, in.current_in_previous);
-      const std::vector<TrackState> frame_tracks = tracker.Update(f, times[f], ego, out.detections);
-      s.front_vertical_offset_px = out.front.vertical_offset_px;
-      front += out.front_ms / 1000.0;
-      sides += out.sides_ms / 1000.0;
+    // What follows the stereo for one frame: tracking, the occupancy grid, the map picture and
+    // writing. It runs alongside the next frame's stereo (SurroundPipeline::Process), in order.
+    const auto finish = [&](FrameOutput& out, int f) {
       auto t2 = Clock::now();
+      const std::vector<TrackState> frame_tracks = tracker.Update(f, times[f], ego, out.detections);
       char caption[128];
       std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
                     out.detections.size());
@@ -204,8 +174,46 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       }
       write += Seconds(t3, Clock::now());
       for (Detection& d : out.detections) detections.push_back(std::move(d));
-      if (progress) progress(f + 1, frames);
+    };
+    FrameOutput pending;  // the previous frame's, not yet finished
+    cv::Mat l, r;
+    for (int f = 0; f < frames; ++f) {
+      auto t0 = Clock::now();
+      if (!left->Read(&l) || !right->Read(&r)) {
+        throw Error(Str(drive_dir, ": frame ", f, " could not be read (the stream ended early)"));
+      }
+      if (l.size() != r.size()) {
+        throw Error(Str(drive_dir, ": frame ", f, ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
+      }
+      if (l.cols != rig.Camera("left").model.width() || l.rows != rig.Camera("left").model.height()) {
+        throw Error(Str(drive_dir, ": frame ", f, " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
+                        rig.Camera("left").model.width(), "x", rig.Camera("left").model.height()));
+      }
+      auto t1 = Clock::now();
+      decode += Seconds(t0, t1);
+      FrameInput in;
+      in.frame = f;
+      in.t_s = times[f];
+      in.left = l;
+      in.right = r;
+      if (f > 0) {
+        std::string why;
+        in.motion_known = MotionBetween(can, times[f - 1], times[f], &in.current_in_previous, &why);
+        if (!in.motion_known) {
+          ++s.frames_without_motion;
+          s.warnings.push_back(Str("frame ", f, ": no known motion (", why, "); side detection skipped"));
+        }
+      }
+      FrameOutput out = pipeline.Process(in, f > 0 ? std::function<void()>([&] { finish(pending, f - 1); }) : nullptr);
+      if (in.motion_known) ego = Compose(ego, in.current_in_previous);
+      s.front_vertical_offset_px = out.front.vertical_offset_px;
+      front += out.front_ms / 1000.0;
+      sides += out.sides_ms / 1000.0;
+      pending = std::move(out);
+      if (progress && f > 0) progress(f, frames);
     }
+    if (frames > 0) finish(pending, frames - 1);
+    if (progress && frames > 0) progress(frames, frames);
     auto t4 = Clock::now();
     if (video.isOpened()) {
       video.release();

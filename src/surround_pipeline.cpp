@@ -1,10 +1,15 @@
 #include "dps/surround_pipeline.h"
 
-#include <chrono>
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <exception>
+
+#include <opencv2/core/utility.hpp>
 
 #include "dps/error.h"
+#include "dps/virtual_view.h"
 
 namespace dps {
 namespace {
@@ -65,32 +70,72 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
 
 SurroundPipeline::~SurroundPipeline() = default;
 
-FrameOutput SurroundPipeline::Process(const FrameInput& in) {
+FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::function<void()>& alongside) {
   FrameOutput out;
   auto now = [] { return std::chrono::steady_clock::now(); };
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
   const auto t0 = now();
-  out.front = front_->Detect(in.left, in.right);
-  const auto t1 = now();
-  out.front_ms = ms(t0, t1);
-  for (const Detection& d : out.front.detections) out.detections.push_back(d);
-  if (options_.sides) {
-    if (previous_left_.empty()) {
-      // The first frame has nothing to compare with.
-    } else if (!in.motion_known) {
-      out.warnings.push_back(Str("frame ", in.frame, ": no known motion (CAN); side detection skipped"));
-    } else {
-      out.left = left_->Detect(previous_left_, in.left, in.current_in_previous, in.t_s - previous_t_s_);
-      out.right = right_->Detect(previous_right_, in.right, in.current_in_previous, in.t_s - previous_t_s_);
-      for (const SideResult* s : {&out.left, &out.right}) {
-        if (s->skipped) continue;
-        for (const Detection& d : s->detections) out.detections.push_back(d);
+  // The first frame has nothing to compare the side views with.
+  const bool sides = options_.sides && !previous_left_.empty() && in.motion_known;
+  if (options_.sides && !previous_left_.empty() && !in.motion_known) {
+    out.warnings.push_back(Str("frame ", in.frame, ": no known motion (CAN); side detection skipped"));
+  }
+  // Grey images of our own, once per frame (every view samples grey images; the side views keep
+  // the previous frame's, and the caller may reuse the input's buffers).
+  cv::Mat grey[2];
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& images) {
+    for (int i = images.start; i < images.end; ++i) {
+      const cv::Mat& image = i == 0 ? in.left : in.right;
+      grey[i] = image.channels() == 1 ? image.clone() : GreyImage(image);
+    }
+  }, 2);
+  // The sources share nothing but the input, so they run as concurrent tasks, with the caller's
+  // `alongside` work: each of cv::getNumThreads() workers takes the next task until none is left,
+  // the longest first (front, alongside, left, right). Each stage's own cv::parallel_for_ then
+  // runs serially inside its task (OpenCV does not nest parallel regions): on 2 cores this costs
+  // less than splitting every stage into stripes, whose synchronisation dominates at the paper's
+  // 320x240 (docs/performance.md).
+  enum Task { kFront, kAlongside, kLeft, kRight };
+  std::vector<Task> tasks{kFront};
+  if (alongside) tasks.push_back(kAlongside);
+  if (sides) tasks.insert(tasks.end(), {kLeft, kRight});
+  const double dt = in.t_s - previous_t_s_;
+  double task_ms[4] = {0, 0, 0, 0};
+  std::exception_ptr failure[4];
+  std::atomic<int> next{0};
+  const int workers = std::max(1, std::min<int>(cv::getNumThreads(), static_cast<int>(tasks.size())));
+  cv::parallel_for_(cv::Range(0, workers), [&](const cv::Range& range) {
+    for (int w = range.start; w < range.end; ++w) {
+      for (int i = next++; i < static_cast<int>(tasks.size()); i = next++) {
+        const Task task = tasks[i];
+        const auto start = now();
+        try {
+          if (task == kFront) out.front = front_->Detect(grey[0], grey[1]);
+          if (task == kAlongside) alongside();
+          if (task == kLeft) out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt);
+          if (task == kRight) out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt);
+        } catch (...) {
+          failure[task] = std::current_exception();
+        }
+        task_ms[task] = ms(start, now());
       }
     }
-    previous_left_ = in.left.clone();
-    previous_right_ = in.right.clone();
+  }, workers);
+  for (const std::exception_ptr& f : failure) {
+    if (f) std::rethrow_exception(f);
+  }
+  out.front_ms = task_ms[kFront];
+  out.sides_ms = task_ms[kLeft] + task_ms[kRight];
+  out.detect_ms = ms(t0, now());
+  out.detections = out.front.detections;
+  for (const SideResult* s : {&out.left, &out.right}) {
+    if (s->skipped) continue;
+    for (const Detection& d : s->detections) out.detections.push_back(d);
+  }
+  if (options_.sides) {
+    previous_left_ = grey[0];
+    previous_right_ = grey[1];
     previous_t_s_ = in.t_s;
-    out.sides_ms = ms(t1, now());
   }
   for (Detection& d : out.detections) {
     d.frame = in.frame;

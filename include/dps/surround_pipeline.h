@@ -3,6 +3,7 @@
 // ground plane of the current vehicle frame.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -53,7 +54,9 @@ struct FrameOutput {
   FrontResult front;
   SideResult left, right;
   std::vector<std::string> warnings;
-  double front_ms = 0.0, sides_ms = 0.0;  // time spent per stage
+  // Time spent per stage: the front pair's and both side pairs' work (the sources run
+  // concurrently, so these may add up to more than detect_ms, their wall time).
+  double front_ms = 0.0, sides_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
 };
 
 class SurroundPipeline {
@@ -62,8 +65,10 @@ class SurroundPipeline {
   ~SurroundPipeline();
 
   // Processes the next frame (frames must come in order; the previous images are kept for
-  // motion stereo).
-  FrameOutput Process(const FrameInput& input);
+  // motion stereo). `alongside` (optional) runs concurrently with the frame's stereo — e.g. the
+  // previous frame's tracking and map, which do not depend on this frame — and is done when
+  // Process returns; an exception from it or from a source is rethrown here.
+  FrameOutput Process(const FrameInput& input, const std::function<void()>& alongside = nullptr);
 
   const Rig& rig() const { return rig_; }
   const Coverage& coverage() const { return coverage_; }
@@ -75,7 +80,7 @@ class SurroundPipeline {
   std::map<std::string, Eigen::Vector2d> viewpoints_;
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<SideDetector> left_, right_;
-  cv::Mat previous_left_, previous_right_;
+  cv::Mat previous_left_, previous_right_;  // the previous frame's omni images, grey
   double previous_t_s_ = 0.0;
 };
 
