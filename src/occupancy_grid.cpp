@@ -206,6 +206,7 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
       std::uint8_t* px = map.ptr<std::uint8_t>(v);
       int u = 0;
 #if CV_SIMD
+      const cv::v_uint8 unknown = cv::vx_setall_u8(128);
       const cv::v_int16 mid = cv::vx_setall_s16(128), grey = cv::vx_setall_s16(kOccupiedGrey);
       const cv::v_int16 free_bg = cv::vx_setall_s16(kFreeBlueRed), free_g = cv::vx_setall_s16(kFreeGreen);
       // One half of a register of pixels: the channel p (8 bits widened) towards its target.
@@ -223,8 +224,10 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
         return cv::v_pack_u(blend(e0, c0, free_target), blend(e1, c1, free_target));
       };
       for (; u + cv::v_uint8::nlanes <= map.cols; u += cv::v_uint8::nlanes) {
+        const cv::v_uint8 levels = cv::vx_load(e + u);
+        if (cv::v_check_all(levels == unknown)) continue;  // most of a map lies beyond the views
         cv::v_uint16 e0, e1;
-        cv::v_expand(cv::vx_load(e + u), e0, e1);
+        cv::v_expand(levels, e0, e1);
         cv::v_uint8 b, g, r;
         cv::v_load_deinterleave(px + 3 * u, b, g, r);
         cv::v_store_interleave(px + 3 * u, channel(e0, e1, b, free_bg), channel(e0, e1, g, free_g),
