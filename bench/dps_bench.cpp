@@ -175,7 +175,8 @@ int main(int argc, char** argv) {
     for (int pass = 0; pass < 2; ++pass) {
       for (const dps::FrameInput& in : inputs) {
         const auto t0 = std::chrono::steady_clock::now();
-        dps::FrameOutput out = pipeline.Process(in, pending_frame >= 0 ? std::function<void()>(finish) : nullptr);
+        dps::FrameOutput out = pipeline.Process(in, pending_frame >= 0 ? std::vector<std::function<void()>>{finish}
+                                                                         : std::vector<std::function<void()>>{});
         const auto tp = std::chrono::steady_clock::now();
         const double ms = span(t0, tp);
         const auto t1 = std::chrono::steady_clock::now();

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
@@ -128,6 +129,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     const std::string diagnostics_tmp = (tmp / ".diagnostics.tmp.avi").string();
     if (png) fs::create_directories(tmp / "map");
     double decode = 0, front = 0, sides = 0, map_s = 0, write = 0;
+    std::mutex decode_mutex;
     // What follows the stereo for one frame: tracking, the occupancy grid, the map picture and
     // writing. It runs alongside the next frame's stereo (SurroundPipeline::Process), in order.
     const auto finish = [&](FrameOutput& out, int f) {
@@ -175,13 +177,22 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       write += Seconds(t3, Clock::now());
       for (Detection& d : out.detections) detections.push_back(std::move(d));
     };
+    // Decoding: frame f + 1's two images are read alongside frame f's stereo, each by its own
+    // task (seconds summed over both).
+    const auto read = [&](FrameSource& source, cv::Mat* image, int f) {
+      const auto t0 = Clock::now();
+      if (!source.Read(image)) throw Error(Str(drive_dir, ": frame ", f, " could not be read (the stream ended early)"));
+      const double seconds = Seconds(t0, Clock::now());
+      std::lock_guard<std::mutex> lock(decode_mutex);
+      decode += seconds;
+    };
     FrameOutput pending;  // the previous frame's, not yet finished
-    cv::Mat l, r;
+    cv::Mat l, r, next_l, next_r;
+    if (frames > 0) {
+      read(*left, &l, 0);
+      read(*right, &r, 0);
+    }
     for (int f = 0; f < frames; ++f) {
-      auto t0 = Clock::now();
-      if (!left->Read(&l) || !right->Read(&r)) {
-        throw Error(Str(drive_dir, ": frame ", f, " could not be read (the stream ended early)"));
-      }
       if (l.size() != r.size()) {
         throw Error(Str(drive_dir, ": frame ", f, ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
       }
@@ -189,8 +200,6 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
         throw Error(Str(drive_dir, ": frame ", f, " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
                         rig.Camera("left").model.width(), "x", rig.Camera("left").model.height()));
       }
-      auto t1 = Clock::now();
-      decode += Seconds(t0, t1);
       FrameInput in;
       in.frame = f;
       in.t_s = times[f];
@@ -204,12 +213,20 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
           s.warnings.push_back(Str("frame ", f, ": no known motion (", why, "); side detection skipped"));
         }
       }
-      FrameOutput out = pipeline.Process(in, f > 0 ? std::function<void()>([&] { finish(pending, f - 1); }) : nullptr);
+      std::vector<std::function<void()>> alongside;
+      if (f > 0) alongside.push_back([&] { finish(pending, f - 1); });
+      if (f + 1 < frames) {
+        alongside.push_back([&] { read(*left, &next_l, f + 1); });
+        alongside.push_back([&] { read(*right, &next_r, f + 1); });
+      }
+      FrameOutput out = pipeline.Process(in, alongside);
       if (in.motion_known) ego = Compose(ego, in.current_in_previous);
       s.front_vertical_offset_px = out.front.vertical_offset_px;
       front += out.front_ms / 1000.0;
       sides += out.sides_ms / 1000.0;
       pending = std::move(out);
+      std::swap(l, next_l);
+      std::swap(r, next_r);
       if (progress && f > 0) progress(f, frames);
     }
     if (frames > 0) finish(pending, frames - 1);

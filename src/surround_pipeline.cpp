@@ -70,7 +70,7 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
 
 SurroundPipeline::~SurroundPipeline() = default;
 
-FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::function<void()>& alongside) {
+FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<std::function<void()>>& alongside) {
   FrameOutput out;
   auto now = [] { return std::chrono::steady_clock::now(); };
   auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
@@ -89,31 +89,32 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::function<
       grey[i] = image.channels() == 1 ? image.clone() : GreyImage(image);
     }
   }, 2);
-  // The sources share nothing but the input, so they run as concurrent tasks, with the caller's
+  // The sources share nothing but the input, so they run as concurrent tasks with the caller's
   // `alongside` work: each of cv::getNumThreads() workers takes the next task until none is left,
-  // the longest first (front, alongside, left, right). Each stage's own cv::parallel_for_ then
-  // runs serially inside its task (OpenCV does not nest parallel regions): on 2 cores this costs
-  // less than splitting every stage into stripes, whose synchronisation dominates at the paper's
-  // 320x240 (docs/performance.md).
-  enum Task { kFront, kAlongside, kLeft, kRight };
-  std::vector<Task> tasks{kFront};
-  if (alongside) tasks.push_back(kAlongside);
+  // in the order front, alongside..., left, right (the front pair is the largest). Each stage's own
+  // cv::parallel_for_ then runs serially inside its task (OpenCV does not nest parallel regions):
+  // on 2 cores this costs less than splitting every stage into stripes, whose synchronisation
+  // dominates at the paper's 320x240 (docs/performance.md).
+  const int n_alongside = static_cast<int>(alongside.size());
+  const int kFront = 0, kLeft = 1, kRight = 2, kAlongside = 3;  // task ids; alongside k is kAlongside + k
+  std::vector<int> tasks{kFront};
+  for (int k = 0; k < n_alongside; ++k) tasks.push_back(kAlongside + k);
   if (sides) tasks.insert(tasks.end(), {kLeft, kRight});
   const double dt = in.t_s - previous_t_s_;
-  double task_ms[4] = {0, 0, 0, 0};
-  std::exception_ptr failure[4];
+  std::vector<double> task_ms(kAlongside + n_alongside, 0.0);
+  std::vector<std::exception_ptr> failure(kAlongside + n_alongside);
   std::atomic<int> next{0};
   const int workers = std::max(1, std::min<int>(cv::getNumThreads(), static_cast<int>(tasks.size())));
   cv::parallel_for_(cv::Range(0, workers), [&](const cv::Range& range) {
     for (int w = range.start; w < range.end; ++w) {
       for (int i = next++; i < static_cast<int>(tasks.size()); i = next++) {
-        const Task task = tasks[i];
+        const int task = tasks[i];
         const auto start = now();
         try {
           if (task == kFront) out.front = front_->Detect(grey[0], grey[1]);
-          if (task == kAlongside) alongside();
           if (task == kLeft) out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt);
           if (task == kRight) out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt);
+          if (task >= kAlongside) alongside[task - kAlongside]();
         } catch (...) {
           failure[task] = std::current_exception();
         }

@@ -65,10 +65,11 @@ class SurroundPipeline {
   ~SurroundPipeline();
 
   // Processes the next frame (frames must come in order; the previous images are kept for
-  // motion stereo). `alongside` (optional) runs concurrently with the frame's stereo — e.g. the
-  // previous frame's tracking and map, which do not depend on this frame — and is done when
-  // Process returns; an exception from it or from a source is rethrown here.
-  FrameOutput Process(const FrameInput& input, const std::function<void()>& alongside = nullptr);
+  // motion stereo). `alongside` (optional): work that runs concurrently with the frame's stereo,
+  // each function as its own task — e.g. the previous frame's tracking and map, or decoding the
+  // next frame, which do not depend on this frame. All of it is done when Process returns; the
+  // first exception from it or from a source is rethrown here.
+  FrameOutput Process(const FrameInput& input, const std::vector<std::function<void()>>& alongside = {});
 
   const Rig& rig() const { return rig_; }
   const Coverage& coverage() const { return coverage_; }
