@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <vector>
 
 #include "check.h"
 #include "dps/occupancy_grid.h"
 #include "dps/scene_io.h"
 #include "dps/scene_renderer.h"
+#include "dps/error.h"
 #include "dps/surround_pipeline.h"
 #include "dps/synth.h"
 #include "dps/truth.h"
@@ -35,6 +37,14 @@ void TestParkedCarsGrid() {
   }
   dps::SurroundPipeline pipeline(scene.rig, dps::DefaultPipelineOptions(scene.rig));
   dps::OccupancyGrid grid;
+  // The same frames as dps-process runs them: a second pipeline, each frame's grid update done
+  // alongside the next frame's stereo. Its detections and its grid must be the same.
+  dps::SurroundPipeline overlapped(scene.rig, dps::DefaultPipelineOptions(scene.rig));
+  dps::OccupancyGrid overlapped_grid;
+  dps::FrameOutput pending;
+  dps::PlanarPose pending_ego;
+  int alongside_runs = 0, mismatches = 0;
+  dps::FrameInput last;
   dps::FrameState state;
   for (int f = 0; f < frames; ++f) {
     state = renderer.StateAt(scene.FrameTime(f));
@@ -47,7 +57,34 @@ void TestParkedCarsGrid() {
     if (f > 0) in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(f - 1), in.t_s);
     const dps::FrameOutput out = pipeline.Process(in);
     grid.Update(state.ego, pipeline.coverage(), out.detections);
+    std::vector<std::function<void()>> alongside;
+    if (f > 0) {
+      alongside.push_back([&] {
+        overlapped_grid.Update(pending_ego, overlapped.coverage(), pending.detections);
+        ++alongside_runs;
+      });
+    }
+    dps::FrameOutput out2 = overlapped.Process(in, alongside);
+    bool same = out2.detections.size() == out.detections.size();
+    for (size_t i = 0; same && i < out.detections.size(); ++i) {
+      same = out2.detections[i].x_m == out.detections[i].x_m && out2.detections[i].z_m == out.detections[i].z_m;
+    }
+    mismatches += !same;
+    pending = std::move(out2);
+    pending_ego = state.ego;
+    last = in;
   }
+  overlapped_grid.Update(pending_ego, overlapped.coverage(), pending.detections);
+  CHECK_EQ(alongside_runs, frames - 1);
+  CHECK_EQ(mismatches, 0);
+  int differing_cells = 0;
+  for (double z = -30.0; z <= 30.0; z += 0.1) {
+    for (double x = -30.0; x <= 30.0; x += 0.1) differing_cells += overlapped_grid.AtVehicle({x, z}) != grid.AtVehicle({x, z});
+  }
+  CHECK_EQ(differing_cells, 0);
+  // An exception in the work alongside reaches the caller.
+  const auto failing = [&] { return overlapped.Process(last, {[] { throw dps::Error("alongside failed"); }}); };
+  CHECK_THROWS_WITH(failing(), dps::Error, "alongside failed");
   const std::vector<dps::TruthRow> truth = dps::TruthAt(state, frames - 1);
   const auto distance_to_cars = [&](const Eigen::Vector2d& p) {
     double best = 1e9;

@@ -1,0 +1,118 @@
+// The surround map picture (surround_map.h): the own car, obstacles, tracks, coverage and the
+// occupancy grid land where the vehicle-frame geometry puts them. Map pixel of vehicle (x, z):
+// u = size/2 + x * scale, v = size/2 - z * scale, scale = size / (2 range) px per metre.
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "check.h"
+#include "dps/surround_map.h"
+
+namespace {
+
+const dps::MapOptions kMap;  // 600 px, 30 m: 10 px per metre
+const double kScale = kMap.size_px / (2.0 * kMap.range_m);
+
+cv::Point Pixel(double x, double z) {
+  return cv::Point(cvRound(kMap.size_px / 2.0 + x * kScale), cvRound(kMap.size_px / 2.0 - z * kScale));
+}
+
+// Pixels of a colour class within `radius` px of a point.
+int Count(const cv::Mat& map, cv::Point at, int radius, bool (*is)(const cv::Vec3b&)) {
+  int n = 0;
+  for (int v = std::max(0, at.y - radius); v <= std::min(map.rows - 1, at.y + radius); ++v) {
+    for (int u = std::max(0, at.x - radius); u <= std::min(map.cols - 1, at.x + radius); ++u) n += is(map.at<cv::Vec3b>(v, u));
+  }
+  return n;
+}
+bool Black(const cv::Vec3b& p) { return p[0] < 30 && p[1] < 30 && p[2] < 30; }
+bool Red(const cv::Vec3b& p) { return p[2] > 180 && p[0] < 80 && p[1] < 80; }
+bool NearMark(const cv::Vec3b& p) { return p[2] > 90 && p[2] < 160 && p[0] < 40 && p[1] < 40; }
+bool Blue(const cv::Vec3b& p) { return p[0] > 150 && p[2] < 60; }
+bool White(const cv::Vec3b& p) { return p == cv::Vec3b(255, 255, 255); }
+
+dps::Coverage FrontOnly() {
+  dps::Coverage c;
+  c.sectors.push_back({"front", {0.0, 0.9}, 0.0, 0.8});  // +-46 degrees straight ahead
+  return c;
+}
+
+void TestBackgroundAndObstacles() {
+  dps::Vehicle car;
+  car.width_m = 1.8;
+  car.length_m = 4.4;
+  const cv::Mat background = dps::DrawMapBackground(car, FrontOnly(), kMap);
+  CHECK_EQ(background.cols, kMap.size_px);
+  // The own car: its whole footprint black, nothing black just beside it.
+  const cv::Point centre = Pixel(0, 0);
+  CHECK_EQ(Count(background, centre, 8, Black), 17 * 17);
+  CHECK_EQ(Count(background, Pixel(3.0, 0.0), 3, Black), 0);
+  // The front sector shaded, the ground behind (outside it, between range rings) left white.
+  CHECK(!White(background.at<cv::Vec3b>(Pixel(0.0, 12.0))));
+  CHECK(White(background.at<cv::Vec3b>(Pixel(0.0, -12.0))));
+
+  // An obstacle 10 m ahead, 4 m to the right: a 2 m wide row of ground points.
+  std::vector<Eigen::Vector2d> points;
+  for (double x = 3.0; x <= 5.0 + 1e-9; x += 0.25) points.emplace_back(x, 10.0);
+  const dps::Detection d = dps::DetectionFromPoints(points, "front");
+  const cv::Mat map = dps::DrawSurroundMap(background, {d}, kMap, "test");
+  const int at_obstacle = Count(map, Pixel(4.0, 10.0), 5, Red);
+  const int elsewhere = Count(map, Pixel(-4.0, 10.0), 10, Red) + Count(map, Pixel(4.0, 14.0), 10, Red);
+  std::printf("map: %d red pixels at the obstacle, %d elsewhere\n", at_obstacle, elsewhere);
+  CHECK(at_obstacle > 40);
+  CHECK_EQ(elsewhere, 0);
+  // Its ends: red at the far one, the near point's dark red mark at the near one, nothing a
+  // metre beyond.
+  CHECK(Count(map, Pixel(5.0, 10.0), 2, Red) > 0);
+  CHECK(Count(map, Pixel(3.0, 10.0), 1, NearMark) > 0);
+  CHECK_EQ(Count(map, Pixel(4.0, 10.0), 1, NearMark), 0);
+  CHECK_EQ(Count(map, Pixel(6.5, 10.0), 3, Red), 0);
+}
+
+void TestTracksAndGrid() {
+  dps::Vehicle car;
+  const cv::Mat background = dps::DrawMapBackground(car, FrontOnly(), kMap);
+  // A confirmed track at (-3, 8) predicted at (-3, 14): an arrow between them, its id beside.
+  dps::TrackState t;
+  t.id = 7;
+  t.confirmed = true;
+  t.x_m = -3.0;
+  t.z_m = 8.0;
+  t.predicted = Eigen::Vector2d(-3.0, 14.0);
+  t.predicted_cov = Eigen::Matrix2d::Identity() * 0.25;
+  cv::Mat map = background.clone();
+  dps::DrawTracks(map, {t}, kMap);
+  CHECK(Count(map, Pixel(-3.0, 11.0), 2, Blue) > 0);  // the arrow's middle
+  CHECK(Count(map, Pixel(-3.0, 14.0), 6, Blue) > 0);  // its head and the ellipse
+  CHECK_EQ(Count(map, Pixel(3.0, 11.0), 10, Blue), 0);
+  t.confirmed = false;  // tentative tracks are not drawn
+  cv::Mat none = background.clone();
+  dps::DrawTracks(none, {t}, kMap);
+  CHECK_EQ(cv::norm(none, background, cv::NORM_INF), 0.0);
+
+  // The occupancy grid under it: a wall 12 m ahead seen for a few frames shows grey there, the
+  // ground before it light green, and the own car stays black on top.
+  dps::OccupancyGrid grid;
+  std::vector<Eigen::Vector2d> wall;
+  for (double x = -2.0; x <= 2.0 + 1e-9; x += 0.1) wall.emplace_back(x, 12.0);
+  for (int f = 0; f < 5; ++f) grid.Update(dps::PlanarPose{}, FrontOnly(), {dps::DetectionFromPoints(wall, "front")});
+  const cv::Mat framed = dps::DrawFrameMap(background, grid, car, {}, {}, kMap, "grid");
+  const cv::Vec3b at_wall = framed.at<cv::Vec3b>(Pixel(0.0, 12.1)), before = framed.at<cv::Vec3b>(Pixel(0.0, 6.0));
+  std::printf("grid on the map: wall (%d, %d, %d), ground before it (%d, %d, %d)\n", at_wall[0], at_wall[1], at_wall[2],
+              before[0], before[1], before[2]);
+  CHECK(std::max({at_wall[0], at_wall[1], at_wall[2]}) < 180);  // darkened towards grey
+  CHECK(std::abs(at_wall[0] - at_wall[1]) <= 10 && std::abs(at_wall[1] - at_wall[2]) <= 10);
+  CHECK(before[1] > before[0] && before[1] > before[2]);
+  CHECK_EQ(Count(framed, Pixel(0, 0), 8, Black), 17 * 17);
+}
+
+}  // namespace
+
+int main() {
+  TestBackgroundAndObstacles();
+  TestTracksAndGrid();
+  return dps_test::Report();
+}
