@@ -102,20 +102,22 @@ std::vector<HistogramComponent> FindComponents(const cv::Mat& histogram, const H
   cv::Mat mask = smooth >= o.threshold;
   cv::Mat labels;
   const int count = cv::connectedComponents(mask, labels, 8, CV_32S);
+  // Each label's columns, in one pass.
+  std::vector<int> first(count, histogram.cols), end(count, 0);
+  for (int b = 0; b < histogram.rows; ++b) {
+    const int* row = labels.ptr<int>(b);
+    for (int x = 0; x < histogram.cols; ++x) {
+      if (row[x] == 0) continue;
+      first[row[x]] = std::min(first[row[x]], x);
+      end[row[x]] = std::max(end[row[x]], x + 1);
+    }
+  }
   std::vector<HistogramComponent> components;
   for (int label = 1; label < count; ++label) {
     HistogramComponent c;
     c.label = label;
-    c.x_begin = histogram.cols;
-    c.x_end = 0;
-    for (int x = 0; x < histogram.cols; ++x) {
-      for (int b = 0; b < histogram.rows; ++b) {
-        if (labels.at<int>(b, x) == label) {
-          c.x_begin = std::min(c.x_begin, x);
-          c.x_end = std::max(c.x_end, x + 1);
-        }
-      }
-    }
+    c.x_begin = first[label];
+    c.x_end = end[label];
     if (c.x_end - c.x_begin < o.min_columns) continue;
     // Centroid of the raw histogram within the component, per column (step 4).
     c.column_disparity.assign(c.x_end - c.x_begin, kInvalidDisparity);
