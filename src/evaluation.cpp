@@ -91,10 +91,10 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
   result.frames = static_cast<int>(frames.size());
 
   for (const int f : frames) {
-    std::vector<const TruthRow*> objects;
-    for (const TruthRow* t : truth_by_frame[f]) {
-      if (in_zone(NearPoint(*t))) objects.push_back(t);
-    }
+    // Objects in the zone count (recall); the others, partly in view, can still be what a
+    // detection in the zone sees, and such a detection is not a false one.
+    std::vector<const TruthRow*> objects, uncounted;
+    for (const TruthRow* t : truth_by_frame[f]) (in_zone(NearPoint(*t)) ? objects : uncounted).push_back(t);
     std::vector<const Detection*> dets;
     for (const Detection* d : det_by_frame[f]) {
       if (in_zone({d->x_m, d->z_m})) dets.push_back(d);
@@ -121,6 +121,26 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
       object_match[p.object] = static_cast<int>(p.detection);
       det_match[p.detection] = static_cast<int>(p.object);
     }
+    // Then the detections left over against the uncounted objects, nearest first.
+    std::vector<bool> sees_uncounted(dets.size(), false);
+    {
+      std::vector<Pair> rest;
+      for (size_t i = 0; i < uncounted.size(); ++i) {
+        const double tolerance = std::max(0.75, 0.1 * NearPoint(*uncounted[i]).norm());
+        for (size_t j = 0; j < dets.size(); ++j) {
+          if (det_match[j] >= 0) continue;
+          const double d = DistanceToFootprint(*uncounted[i], {dets[j]->x_m, dets[j]->z_m});
+          if (d <= tolerance) rest.push_back({d, i, j});
+        }
+      }
+      std::sort(rest.begin(), rest.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+      std::vector<bool> taken(uncounted.size(), false);
+      for (const Pair& p : rest) {
+        if (taken[p.object] || sees_uncounted[p.detection]) continue;
+        taken[p.object] = true;
+        sees_uncounted[p.detection] = true;
+      }
+    }
     for (size_t i = 0; i < objects.size(); ++i) {
       const double range = NearPoint(*objects[i]).norm();
       for (BandScore* b : {&result.overall, band_of(range)}) {
@@ -143,11 +163,11 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
       for (BandScore* b : {&result.overall, band_of(range)}) {
         if (!b) continue;
         ++b->detections;
-        b->matched_detections += det_match[j] >= 0;
+        b->matched_detections += det_match[j] >= 0 || sees_uncounted[j];
       }
       SourceScore* s = source_of(dets[j]->source);
       ++s->detections;
-      s->matched += det_match[j] >= 0;
+      s->matched += det_match[j] >= 0 || sees_uncounted[j];
     }
   }
   return result;

@@ -259,6 +259,14 @@ void TestEvaluation() {
   r = dps::Evaluate(dets, {car, far, side}, o);
   CHECK_EQ(r.overall.objects, 1);
   CHECK_EQ(r.overall.detections, 1);
+  // A car passing on the left (x -3.4..-1.6, z -0.25..4.25) has its near point (-1.6, 0) outside
+  // the front sector, so it does not count; a detection on its side inside the sector is not a
+  // false one, but a second detection on it is (each object matched at most once).
+  const dps::TruthRow passing{0, 0.0, 4, "car", -2.5, 2.0, 0.0, 4.5, 1.8, 1.5, 0, 0};
+  r = dps::Evaluate({det(-1.6, 4.0, "front"), det(-1.7, 3.6, "front")}, {passing}, o);
+  CHECK_EQ(r.overall.objects, 0);
+  CHECK_EQ(r.overall.detections, 2);
+  CHECK_EQ(r.overall.matched_detections, 1);
   // Detections more than the tolerance away do not match.
   r = dps::Evaluate({det(2.0, 7.0, "front")}, {car}, dps::EvaluationOptions{});
   CHECK_EQ(r.overall.matched_objects, 0);

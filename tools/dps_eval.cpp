@@ -16,8 +16,10 @@ const char* kUsage = R"(usage: dps-eval --detections detections.csv [--tracks tr
 Scores detections against ground truth (DESIGN.md §5): per frame, a truth object counts when the
 point of its footprint nearest to the vehicle (its near point) is within --max-range and inside
 the processed field of view; a detection matches an object when its (x, z) lies within
-max(0.75 m, 0.1 * range) of the footprint; nearest pairs first, each at most once. Prints recall,
-precision and range errors per range band and per source.
+max(0.75 m, 0.1 * range) of the footprint; nearest pairs first, each at most once, the counted
+objects first. A detection in the zone that matches an object not counted (near point outside the
+zone, part of it inside) is a true detection: it counts for precision, the object not for recall.
+Prints recall, precision and range errors per range band and per source.
 
 Field of view: with --rig, the sectors the default pipeline's views cover (the front pair from the
 cameras' midpoint, each side view from its camera, each +-atan(width / 2f)); without it, every

@@ -5,9 +5,13 @@
 // vehicle origin) lies within max_range_m and inside the processed field of view (Coverage); a
 // detection is in the zone under the same rule for its (x, z). A detection matches an object when
 // its (x, z) lies within max(0.75 m, 0.1 * range of the object's near point) of the footprint
-// (0 inside); pairs are taken nearest first, each object and each detection at most once.
-// recall = matched objects / counted objects; precision = matched detections / detections in the
-// zone; range error = |detection range - near-point range|, per band of the near point's range.
+// (0 inside); pairs are taken nearest first, each object and each detection at most once: first
+// with the counted objects, then what is left with the objects that do not count (their near point
+// outside the zone, the rest of them partly inside it) — a detection of such an object is a true
+// one, though the object is not counted for recall.
+// recall = matched counted objects / counted objects; precision = matched detections / detections
+// in the zone; range error = |detection range - near-point range| of the counted matches, per band
+// of the near point's range.
 //
 // Field of view: the pipeline's views are sectors on the ground, each an apex (the viewpoint,
 // or the front pair's midpoint), a direction and a half-angle (atan of half the view width over
