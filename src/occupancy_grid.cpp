@@ -180,7 +180,7 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
   // Blend towards grey (occupied) or light green (free) by |evidence| / clamp, in 1/128 steps:
   // pixel += (target - pixel) * |level - 128| / 128 (unknown cells, level 128, leave it as it is).
   cv::parallel_for_(cv::Range(0, map.rows), [&](const cv::Range& rows) {
-    const int n = block, cols = map.cols;
+    const int n = block;
     std::vector<std::uint8_t> expanded(n > 1 ? level.cols * n : 0);
     int expanded_row = -1;
     for (int v = rows.start; v < rows.end; ++v) {
