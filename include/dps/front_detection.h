@@ -38,10 +38,6 @@ struct FrontDetectorOptions {
   // (LinkComponents; link_max_gap = 0: never).
   int link_max_gap = 60;
   double link_max_gap_m = 6.0;
-  // ... and, when the gap on the ground is longer than link_free_gap_m, only if the parts together
-  // are at most link_max_length_m long (one vehicle): two parked cars a car's gap apart stay two.
-  double link_free_gap_m = 1.0;
-  double link_max_length_m = 5.5;
   double max_range_m = 60.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
   // Components whose pixels reach less than this above the road (median over columns) are flat
