@@ -17,7 +17,11 @@ mkdir -p "$OUT"
   --rig "$OUT/drives/$SCENE/rig.yaml" --json "$OUT/results/$SCENE/scores.json" | tee "$OUT/results/$SCENE/scores.txt"
 echo
 echo "Drive (synthetic, with truth):  $OUT/drives/$SCENE/"
-echo "Surround map video:             $OUT/results/$SCENE/map.avi   (frames: $OUT/results/$SCENE/map/)"
+VIDEO="none (no encoder)"
+for v in map.mp4 map.avi; do
+  if [ -f "$OUT/results/$SCENE/$v" ]; then VIDEO="$OUT/results/$SCENE/$v"; break; fi
+done
+echo "Surround map video:             $VIDEO   (frames: $OUT/results/$SCENE/map/)"
 echo "Detections / tracks:            $OUT/results/$SCENE/detections.csv, tracks.csv"
 head -n 4 "$OUT/results/$SCENE/detections.csv" | column -t -s, 2>/dev/null || head -n 4 "$OUT/results/$SCENE/detections.csv"
 echo "Scores (DESIGN.md §5):          $OUT/results/$SCENE/scores.txt, scores.json"

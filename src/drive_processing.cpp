@@ -113,15 +113,24 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     std::vector<TrackState> tracks;
     PlanarPose ego;  // the vehicle in the tracker's world (its pose at frame 0)
     OccupancyGrid grid(o.occupancy);
+    // The map video: H.264 in MP4 where OpenCV has an encoder for it (a fiftieth of MJPG's size
+    // on these pictures), else MPEG-4 part 2 in MP4, else MJPG in AVI, else PNGs with a warning.
     cv::VideoWriter video;
-    const std::string video_tmp = (tmp / ".map.tmp.avi").string();
+    std::string video_tmp, video_name;
     if (o.map_video) {
-      video.open(video_tmp, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
-                 frames > 1 ? std::max(1.0, (frames - 1) / std::max(1e-6, times[frames - 1] - times[0])) : 10.0,
-                 cv::Size(o.map.size_px, o.map.size_px));
-      if (!video.isOpened()) {
-        s.warnings.push_back("no MJPG video encoder; writing map/ PNGs instead");
+      const double fps = frames > 1 ? std::max(1.0, (frames - 1) / std::max(1e-6, times[frames - 1] - times[0])) : 10.0;
+      const struct {
+        const char* name;
+        int fourcc;
+      } formats[] = {{"map.mp4", cv::VideoWriter::fourcc('a', 'v', 'c', '1')},
+                     {"map.mp4", cv::VideoWriter::fourcc('m', 'p', '4', 'v')},
+                     {"map.avi", cv::VideoWriter::fourcc('M', 'J', 'P', 'G')}};
+      for (const auto& f : formats) {
+        video_name = f.name;
+        video_tmp = (tmp / (".tmp." + video_name)).string();  // the extension picks the container
+        if (video.open(video_tmp, f.fourcc, fps, cv::Size(o.map.size_px, o.map.size_px))) break;
       }
+      if (!video.isOpened()) s.warnings.push_back("no video encoder; writing map/ PNGs instead");
     }
     const bool png = o.map_png || (o.map_video && !video.isOpened());
     const cv::Mat map_background = DrawMapBackground(rig.vehicle, pipeline.coverage(), o.map);
@@ -234,7 +243,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     auto t4 = Clock::now();
     if (video.isOpened()) {
       video.release();
-      RenameReplacing(video_tmp, (tmp / "map.avi").string());
+      RenameReplacing(video_tmp, (tmp / video_name).string());
     }
     if (diagnostics.isOpened()) {
       diagnostics.release();

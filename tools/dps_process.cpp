@@ -18,7 +18,8 @@ const char* kUsage = R"(usage: dps-process DRIVE_DIR... --out OUT_DIR [options]
 
 Processes recorded drives (DESIGN.md §3.2: rig.yaml, left/ and right/ images or left.<ext> and
 right.<ext> videos, can.csv, optional frames.csv) into OUT_DIR/<drive folder name>/:
-detections.csv, map.avi (the surround map, MJPG; map/ PNGs when no encoder) and summary.json.
+detections.csv, tracks.csv, map.mp4 (the surround map video, H.264 or MPEG-4; map.avi with MJPG,
+or map/ PNGs, when OpenCV has no such encoder) and summary.json.
 Outputs appear only when complete; drives already complete are skipped (--force redoes them).
 One bad drive is reported and the others still run; the exit status is the number that failed.
 
@@ -30,7 +31,7 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --map-png             also write map/NNNNNN.png
   --diagnostics         also write diagnostics.avi: six panels per source (views, composite,
                         disparity, column histogram, obstacles) and diagnostics_middle.png
-  --no-video            no map.avi
+  --no-video            no map video
   --truncate            left and right differ in length: use the shorter
   --image-fps F         frame rate of image folders without frames.csv (default 30)
   --speed-column NAME   CAN column with the speed (default speed)
