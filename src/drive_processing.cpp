@@ -43,7 +43,8 @@ std::string DriveSummary::ToJson() const {
   o.precision(6);
   o << "{\n  \"drive\": " << JsonString(drive) << ",\n  \"frames\": " << frames
     << ",\n  \"frames_without_motion\": " << frames_without_motion << ",\n  \"detections\": " << detections
-    << ",\n  \"front_vertical_offset_px\": " << front_vertical_offset_px << ",\n  \"seconds\": " << seconds << ",\n  \"frames_per_second\": " << frames_per_second
+    << ",\n  \"front_vertical_offset_px\": " << front_vertical_offset_px << ",\n  \"map_video\": " << JsonString(map_video)
+    << ",\n  \"seconds\": " << seconds << ",\n  \"frames_per_second\": " << frames_per_second
     << ",\n  \"stage_seconds\": {";
   bool first = true;
   for (const auto& [k, v] : stage_seconds) {
@@ -121,14 +122,18 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       const double fps = frames > 1 ? std::max(1.0, (frames - 1) / std::max(1e-6, times[frames - 1] - times[0])) : 10.0;
       const struct {
         const char* name;
+        const char* codec;
         int fourcc;
-      } formats[] = {{"map.mp4", cv::VideoWriter::fourcc('a', 'v', 'c', '1')},
-                     {"map.mp4", cv::VideoWriter::fourcc('m', 'p', '4', 'v')},
-                     {"map.avi", cv::VideoWriter::fourcc('M', 'J', 'P', 'G')}};
+      } formats[] = {{"map.mp4", "H.264", cv::VideoWriter::fourcc('a', 'v', 'c', '1')},
+                     {"map.mp4", "MPEG-4 part 2", cv::VideoWriter::fourcc('m', 'p', '4', 'v')},
+                     {"map.avi", "MJPG", cv::VideoWriter::fourcc('M', 'J', 'P', 'G')}};
       for (const auto& f : formats) {
         video_name = f.name;
         video_tmp = (tmp / (".tmp." + video_name)).string();  // the extension picks the container
-        if (video.open(video_tmp, f.fourcc, fps, cv::Size(o.map.size_px, o.map.size_px))) break;
+        if (video.open(video_tmp, f.fourcc, fps, cv::Size(o.map.size_px, o.map.size_px))) {
+          s.map_video = Str(f.name, " (", f.codec, ")");
+          break;
+        }
       }
       if (!video.isOpened()) s.warnings.push_back("no video encoder; writing map/ PNGs instead");
     }

@@ -142,10 +142,13 @@ void TestProcessDrive() {
     cv::VideoCapture replay(video.string());
     int read = 0;
     for (cv::Mat m; replay.read(m); ++read) CHECK_EQ(m.cols, 600);
-    std::printf("map video %s: %d frames read back\n", video.filename().string().c_str(), read);
+    std::printf("map video %s: %d frames read back\n", s.map_video.c_str(), read);
     CHECK_EQ(read, 6);
+    CHECK_EQ(s.map_video.rfind(video.filename().string(), 0), size_t{0});  // summary.json names it
+    CHECK(s.ToJson().find("\"map_video\": \"" + s.map_video + "\"") != std::string::npos);
   } else {
     CHECK(!s.warnings.empty());
+    CHECK(s.map_video.empty());
   }
   const std::vector<dps::Detection> d = dps::ReadDetections((kTmp / "out" / "lead" / "detections.csv").string());
   CHECK_EQ(static_cast<int>(d.size()), s.detections);

@@ -36,6 +36,7 @@ struct DriveSummary {
   int frames_without_motion = 0;  // side detection skipped for them
   int detections = 0;
   double front_vertical_offset_px = 0.0;  // drift correction of the front pair at the end
+  std::string map_video;          // the map video's file name and codec ("map.mp4 (H.264)"); "" = none
   std::vector<std::string> warnings;
   std::map<std::string, double> stage_seconds;  // decode, front, sides, map, write
   double seconds = 0.0;
