@@ -27,6 +27,35 @@ std::string Number(double v, int digits = 3) {
   return buf;
 }
 
+// Matches objects with the detections not taken yet (det_object[j] < 0): pairs within
+// max(0.75 m, 0.1 * range of the near point) of the footprint, nearest first, each object and
+// each detection at most once. Sets det_object[j] to the index of detection j's object and
+// returns each object's detection (-1: none).
+std::vector<int> MatchNearestFirst(const std::vector<const TruthRow*>& objects, const std::vector<const Detection*>& dets,
+                                   std::vector<int>* det_object) {
+  struct Pair {
+    double distance;
+    size_t object, detection;
+  };
+  std::vector<Pair> pairs;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const double tolerance = std::max(0.75, 0.1 * NearPoint(*objects[i]).norm());
+    for (size_t j = 0; j < dets.size(); ++j) {
+      if ((*det_object)[j] >= 0) continue;
+      const double d = DistanceToFootprint(*objects[i], {dets[j]->x_m, dets[j]->z_m});
+      if (d <= tolerance) pairs.push_back({d, i, j});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+  std::vector<int> object_match(objects.size(), -1);
+  for (const Pair& p : pairs) {
+    if (object_match[p.object] >= 0 || (*det_object)[p.detection] >= 0) continue;
+    object_match[p.object] = static_cast<int>(p.detection);
+    (*det_object)[p.detection] = static_cast<int>(p.object);
+  }
+  return object_match;
+}
+
 }  // namespace
 
 bool Coverage::Contains(const Eigen::Vector2d& p) const {
@@ -100,47 +129,12 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
       if (in_zone({d->x_m, d->z_m})) dets.push_back(d);
     }
     if (!dets.empty()) ++result.frames_with_detections;
-    // Candidate pairs within the tolerance, nearest first.
-    struct Pair {
-      double distance;
-      size_t object, detection;
-    };
-    std::vector<Pair> pairs;
-    for (size_t i = 0; i < objects.size(); ++i) {
-      const double range = NearPoint(*objects[i]).norm();
-      const double tolerance = std::max(0.75, 0.1 * range);
-      for (size_t j = 0; j < dets.size(); ++j) {
-        const double d = DistanceToFootprint(*objects[i], {dets[j]->x_m, dets[j]->z_m});
-        if (d <= tolerance) pairs.push_back({d, i, j});
-      }
-    }
-    std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
-    std::vector<int> object_match(objects.size(), -1), det_match(dets.size(), -1);
-    for (const Pair& p : pairs) {
-      if (object_match[p.object] >= 0 || det_match[p.detection] >= 0) continue;
-      object_match[p.object] = static_cast<int>(p.detection);
-      det_match[p.detection] = static_cast<int>(p.object);
-    }
-    // Then the detections left over against the uncounted objects, nearest first.
-    std::vector<bool> sees_uncounted(dets.size(), false);
-    {
-      std::vector<Pair> rest;
-      for (size_t i = 0; i < uncounted.size(); ++i) {
-        const double tolerance = std::max(0.75, 0.1 * NearPoint(*uncounted[i]).norm());
-        for (size_t j = 0; j < dets.size(); ++j) {
-          if (det_match[j] >= 0) continue;
-          const double d = DistanceToFootprint(*uncounted[i], {dets[j]->x_m, dets[j]->z_m});
-          if (d <= tolerance) rest.push_back({d, i, j});
-        }
-      }
-      std::sort(rest.begin(), rest.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
-      std::vector<bool> taken(uncounted.size(), false);
-      for (const Pair& p : rest) {
-        if (taken[p.object] || sees_uncounted[p.detection]) continue;
-        taken[p.object] = true;
-        sees_uncounted[p.detection] = true;
-      }
-    }
+    std::vector<int> det_match(dets.size(), -1);
+    const std::vector<int> object_match = MatchNearestFirst(objects, dets, &det_match);
+    // Then the detections left over against the uncounted objects: det_seen[j] >= 0 when
+    // detection j saw an object, counted or not.
+    std::vector<int> det_seen = det_match;
+    MatchNearestFirst(uncounted, dets, &det_seen);
     for (size_t i = 0; i < objects.size(); ++i) {
       const double range = NearPoint(*objects[i]).norm();
       for (BandScore* b : {&result.overall, band_of(range)}) {
@@ -163,11 +157,11 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
       for (BandScore* b : {&result.overall, band_of(range)}) {
         if (!b) continue;
         ++b->detections;
-        b->matched_detections += det_match[j] >= 0 || sees_uncounted[j];
+        b->matched_detections += det_seen[j] >= 0;
       }
       SourceScore* s = source_of(dets[j]->source);
       ++s->detections;
-      s->matched += det_match[j] >= 0 || sees_uncounted[j];
+      s->matched += det_seen[j] >= 0;
     }
   }
   return result;

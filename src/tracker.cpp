@@ -20,8 +20,13 @@ void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_
   const Eigen::Vector2d u = world_from_vehicle * d.motion_direction;
   Eigen::Matrix<double, 1, 5> H;
   H << 0, 0, u.x(), u.y(), 0;
-  const double S = (H * t->P * H.transpose())(0, 0) + d.motion_sigma_mps * d.motion_sigma_mps;
-  const double innovation = d.motion_mps - (H * t->x)(0, 0);
+  ScalarUpdate(H, d.motion_mps - (H * t->x)(0, 0), d.motion_sigma_mps * d.motion_sigma_mps, gate_chi2, t);
+}
+
+// One scalar measurement of H x: its innovation and variance; skipped outside the gate.
+void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
+                           Track* t) {
+  const double S = (H * t->P * H.transpose())(0, 0) + variance;
   if (innovation * innovation > gate_chi2 * S) return;
   const Eigen::Matrix<double, 5, 1> K = t->P * H.transpose() / S;
   t->x += K * innovation;
@@ -258,10 +263,8 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
       // Only the offset across the axis: H = [n^T 0], one scalar measurement.
       Eigen::Matrix<double, 1, 5> H;
       H << across[i].x(), across[i].y(), 0, 0, 0;
-      const double S = (H * t.P * H.transpose())(0, 0) + across[i].dot(R[j] * across[i]);
-      const Eigen::Matrix<double, 5, 1> K = t.P * H.transpose() / S;
-      t.x += K * across[i].dot(m.point - t.x.head<2>());
-      t.P = (Cov::Identity() - K * H) * t.P;
+      ScalarUpdate(H, across[i].dot(m.point - t.x.head<2>()), across[i].dot(R[j] * across[i]),
+                   std::numeric_limits<double>::infinity(), &t);
     } else {
       // Update (H = [I 0]).
       const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + R[j];

@@ -103,6 +103,8 @@ class Tracker {
   Cov ProcessNoise(const Eigen::Matrix2d& accel, double dt) const;
   static State Predict(const State& x, double dt, Cov* F);
   static void ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, double gate_chi2, Track* t);
+  static void ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
+                           Track* t);
   TrackerOptions options_;
   std::vector<Track> tracks_;
   int next_id_ = 1;
