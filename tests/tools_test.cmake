@@ -89,6 +89,19 @@ expect(0 "band \\(m\\)" "${TOOLS}/dps-eval" --detections "${WORK}/results/lead/d
 if(NOT EXISTS "${WORK}/scores.json")
   message(FATAL_ERROR "dps-eval wrote no --json file")
 endif()
+# --force redoes a complete drive; --list adds drives from a file; --shard I/N takes every N-th
+# drive of the list from I, so two shards process each drive once between them.
+expect(0 "1 processed, 0 skipped" "${TOOLS}/dps-process" "${WORK}/drives/lead" --out "${WORK}/results" --force)
+file(COPY "${WORK}/drives/lead/" DESTINATION "${WORK}/drives/lead2")
+file(WRITE "${WORK}/drives.txt" "${WORK}/drives/lead\n${WORK}/drives/lead2\n")
+expect(0 "1 processed, 0 skipped, 0 failed" "${TOOLS}/dps-process" --list "${WORK}/drives.txt" --out "${WORK}/sharded"
+       --shard 1/2)
+if(EXISTS "${WORK}/sharded/lead" OR NOT EXISTS "${WORK}/sharded/lead2/summary.json")
+  message(FATAL_ERROR "--shard 1/2 of two listed drives should process the second only")
+endif()
+expect(0 "1 processed, 0 skipped, 0 failed" "${TOOLS}/dps-process" --list "${WORK}/drives.txt" --out "${WORK}/sharded"
+       --shard 0/2)
+expect(0 "0 processed, 2 skipped, 0 failed" "${TOOLS}/dps-process" --list "${WORK}/drives.txt" --out "${WORK}/sharded")
 # One bad drive among good ones: reported, the others finish, exit status = failures.
 file(MAKE_DIRECTORY "${WORK}/drives/broken")
 expect(nonzero "broken/rig.yaml: file not found" "${TOOLS}/dps-process" "${WORK}/drives/broken" "${WORK}/drives/lead"
