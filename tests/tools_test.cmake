@@ -92,6 +92,9 @@ endif()
 # --force redoes a complete drive; --list adds drives from a file; --shard I/N takes every N-th
 # drive of the list from I, so two shards process each drive once between them.
 expect(0 "1 processed, 0 skipped" "${TOOLS}/dps-process" "${WORK}/drives/lead" --out "${WORK}/results" --force)
+# Off a terminal the progress is plain lines: frames, frames/s, the drive's and the batch's ETA.
+expect(0 "drive 1/1 [^ ]*lead frame 8/8 \\([0-9.]+ frames/s, ETA 0 s, all 0 s\\)" "${TOOLS}/dps-process"
+       "${WORK}/drives/lead" --out "${WORK}/results" --force)
 file(COPY "${WORK}/drives/lead/" DESTINATION "${WORK}/drives/lead2")
 file(WRITE "${WORK}/drives.txt" "${WORK}/drives/lead\n${WORK}/drives/lead2\n")
 expect(0 "1 processed, 0 skipped, 0 failed" "${TOOLS}/dps-process" --list "${WORK}/drives.txt" --out "${WORK}/sharded"

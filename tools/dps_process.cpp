@@ -95,6 +95,16 @@ int main(int argc, char** argv) {
     std::atomic<int> failed{0}, done{0}, skipped{0};
     std::atomic<size_t> next{0};
     std::mutex print;
+    // The whole batch's progress for its ETA: each drive's done fraction (under `print`).
+    const auto batch_start = std::chrono::steady_clock::now();
+    std::vector<double> fraction(mine.size(), 0.0);
+    const auto batch_eta = [&] {
+      double sum = 0;
+      for (const double f : fraction) sum += f;
+      const double share = sum / std::max<size_t>(1, mine.size());
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_start).count();
+      return share > 0 ? s * (1 - share) / share : 0.0;
+    };
     auto worker = [&] {
       for (size_t i = next++; i < mine.size(); i = next++) {
         const std::string& drive = mine[i];
@@ -102,6 +112,7 @@ int main(int argc, char** argv) {
         if (!args.Has("force") && dps::DriveOutputComplete(out_dir)) {
           ++skipped;
           std::lock_guard<std::mutex> lock(print);
+          fraction[i] = 1.0;
           if (!quiet) std::cerr << "dps-process: " << out_dir << " is complete; skipped (--force redoes it)\n";
           continue;
         }
@@ -113,13 +124,15 @@ int main(int argc, char** argv) {
           const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
           const double fps = f / std::max(s, 1e-9);
           std::lock_guard<std::mutex> lock(print);
+          fraction[i] = total > 0 ? static_cast<double>(f) / total : 1.0;
+          const double drive_eta = (total - f) / std::max(fps, 1e-9), all_eta = batch_eta();
           if (live) {
-            std::fprintf(stderr, "\rdps-process: drive %zu/%zu %s  frame %d/%d  %.1f frames/s  ETA %.0f s   ", i + 1,
-                         mine.size(), drive.c_str(), f, total, fps, (total - f) / std::max(fps, 1e-9));
+            std::fprintf(stderr, "\rdps-process: drive %zu/%zu %s  frame %d/%d  %.1f frames/s  ETA %.0f s, all %.0f s   ",
+                         i + 1, mine.size(), drive.c_str(), f, total, fps, drive_eta, all_eta);
             if (f == total) std::fprintf(stderr, "\n");
           } else if (f == total || f % 25 == 0) {
-            std::fprintf(stderr, "dps-process: drive %zu/%zu %s frame %d/%d (%.1f frames/s)\n", i + 1, mine.size(),
-                         drive.c_str(), f, total, fps);
+            std::fprintf(stderr, "dps-process: drive %zu/%zu %s frame %d/%d (%.1f frames/s, ETA %.0f s, all %.0f s)\n",
+                         i + 1, mine.size(), drive.c_str(), f, total, fps, drive_eta, all_eta);
           }
         };
         try {
@@ -135,6 +148,7 @@ int main(int argc, char** argv) {
         } catch (const std::exception& e) {
           ++failed;
           std::lock_guard<std::mutex> lock(print);
+          fraction[i] = 1.0;
           std::cerr << "dps-process: error: " << e.what() << std::endl;
         }
       }
