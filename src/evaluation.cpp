@@ -136,7 +136,9 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
     std::vector<int> det_seen = det_match;
     MatchNearestFirst(uncounted, dets, &det_seen);
     for (size_t i = 0; i < objects.size(); ++i) {
-      const double range = NearPoint(*objects[i]).norm();
+      const Eigen::Vector2d near = NearPoint(*objects[i]);
+      const double range = near.norm();
+      if (object_match[i] < 0) result.errors.push_back({f, true, objects[i]->id, objects[i]->kind, near, range});
       for (BandScore* b : {&result.overall, band_of(range)}) {
         if (!b) continue;
         ++b->objects;
@@ -158,6 +160,9 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
         if (!b) continue;
         ++b->detections;
         b->matched_detections += det_seen[j] >= 0;
+      }
+      if (det_seen[j] < 0) {
+        result.errors.push_back({f, false, -1, dets[j]->source, {dets[j]->x_m, dets[j]->z_m}, dets[j]->range_m});
       }
       SourceScore* s = source_of(dets[j]->source);
       ++s->detections;
@@ -260,6 +265,16 @@ std::string EvaluationJson(const EvaluationResult& r) {
   }
   out << "],\n  \"frames\": " << r.frames << ",\n  \"frames_with_detections\": " << r.frames_with_detections
       << "\n}\n";
+  return out.str();
+}
+
+std::string ScoringErrorsCsv(const EvaluationResult& r) {
+  std::ostringstream out;
+  out << "frame,error,id,kind,x,z,range\n";
+  for (const ScoringError& e : r.errors) {
+    out << e.frame << ',' << (e.missed ? "missed" : "false") << ',' << e.object_id << ',' << e.kind << ','
+        << Number(e.point.x()) << ',' << Number(e.point.y()) << ',' << Number(e.range_m) << '\n';
+  }
   return out.str();
 }
 

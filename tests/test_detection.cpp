@@ -267,10 +267,14 @@ void TestEvaluation() {
   CHECK_EQ(r.overall.objects, 0);
   CHECK_EQ(r.overall.detections, 2);
   CHECK_EQ(r.overall.matched_detections, 1);
-  // Detections more than the tolerance away do not match.
+  // Detections more than the tolerance away do not match; the error list names the missed car
+  // (id 1, near point (0, 7.75)) and the false detection (front, (2, 7)).
   r = dps::Evaluate({det(2.0, 7.0, "front")}, {car}, dps::EvaluationOptions{});
   CHECK_EQ(r.overall.matched_objects, 0);
   CHECK(dps::EvaluationJson(r).find("\"recall\": 0.0000") != std::string::npos);
+  CHECK_EQ(dps::ScoringErrorsCsv(r), std::string("frame,error,id,kind,x,z,range\n"
+                                                 "0,missed,1,car,0.000,7.750,7.750\n"
+                                                 "0,false,-1,front,2.000,7.000,7.280\n"));
 }
 
 // Front detection on rendered drives: the lead car found at its true range in every frame where

@@ -33,6 +33,11 @@ direction counts.
   --max-range M       evaluated zone, metres (default 20)
   --rig FILE          rig.yaml for the field of view
   --json FILE         also write the scores as JSON
+  --errors FILE       also write each scoring error as CSV, to see what went wrong where:
+                      frame,error,id,kind,x,z,range — "missed" (a counted object no detection
+                      matched: its id, kind and near point) or "false" (a detection in the zone
+                      that matched no object: id -1, its source as kind, its point); of the
+                      detections, or of the tracks when only --tracks is given
   --help              this text
 )";
 
@@ -40,7 +45,7 @@ direction counts.
 
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-eval", [&] {
-    const dps_cli::Args args(argc, argv, {"detections", "tracks", "truth", "max-range", "rig", "json"}, {});
+    const dps_cli::Args args(argc, argv, {"detections", "tracks", "truth", "max-range", "rig", "json", "errors"}, {});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -55,11 +60,12 @@ int main(int argc, char** argv) {
       options.coverage = dps::PipelineCoverage(rig, dps::DefaultPipelineOptions(rig));
     }
     const std::vector<dps::TruthRow> truth = dps::ReadTruth(args.Get("truth"));
-    std::string json;
+    std::string json, errors;
     if (args.Has("detections")) {
       const dps::EvaluationResult r = dps::Evaluate(dps::ReadDetections(args.Get("detections")), truth, options);
       std::cout << dps::EvaluationTable(r);
       json = dps::EvaluationJson(r);
+      errors = dps::ScoringErrorsCsv(r);
     }
     if (args.Has("tracks")) {
       const dps::TrackEvaluation r = dps::EvaluateTracks(dps::ReadTracks(args.Get("tracks")), truth, options);
@@ -68,8 +74,10 @@ int main(int argc, char** argv) {
                   r.positions.overall.MedianVelocityError(), r.objects_tracked, r.id_switches);
       json = "{\"detections\": " + (json.empty() ? std::string("null") : json) + ", \"tracks\": " +
              dps::EvaluationJson(r.positions) + ", \"id_switches\": " + std::to_string(r.id_switches) + "}\n";
+      if (errors.empty()) errors = dps::ScoringErrorsCsv(r.positions);
     }
     if (args.Has("json")) dps::WriteFileAtomically(args.Get("json"), json);
+    if (args.Has("errors")) dps::WriteFileAtomically(args.Get("errors"), errors);
     return 0;
   });
 }

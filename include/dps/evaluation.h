@@ -67,12 +67,24 @@ struct SourceScore {
   double Precision() const;
 };
 
+// One scoring error, for finding out why: a counted object no detection matched, or a detection
+// in the zone that matched no object.
+struct ScoringError {
+  int frame = 0;
+  bool missed = false;        // true: a missed object; false: a false detection
+  int object_id = -1;         // missed: the truth id
+  std::string kind;           // missed: the truth kind; false: the detection's source
+  Eigen::Vector2d point{0, 0};  // missed: the near point; false: the detection's (x, z)
+  double range_m = 0.0;
+};
+
 struct EvaluationResult {
   BandScore overall;                 // all objects / detections in the zone
   std::vector<BandScore> bands;      // 0-10, 10-20, 20-30, 30-50 m (object near-point range)
   std::vector<SourceScore> sources;  // front, left, right
   int frames = 0;                    // frames with truth rows or detections
   int frames_with_detections = 0;    // frames with at least one detection in the zone
+  std::vector<ScoringError> errors;  // by frame: missed objects, then false detections
 };
 
 // Scores detections against truth (frames matched by index).
@@ -94,5 +106,8 @@ TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std:
 // A table for people (per band and per source) and a JSON document for scripts.
 std::string EvaluationTable(const EvaluationResult& result);
 std::string EvaluationJson(const EvaluationResult& result);
+// The scoring errors as CSV: frame,error,id,kind,x,z,range (error "missed" with the object's id,
+// kind and near point, or "false" with the detection's source as kind, id -1, and its point).
+std::string ScoringErrorsCsv(const EvaluationResult& result);
 
 }  // namespace dps
