@@ -58,13 +58,19 @@ std::vector<int> MatchNearestFirst(const std::vector<const TruthRow*>& objects, 
 
 }  // namespace
 
+Eigen::Vector2d Sector::Vertex() const {
+  return apex + start_m * Eigen::Vector2d(std::sin(direction_rad), std::cos(direction_rad));
+}
+
+bool Sector::Contains(const Eigen::Vector2d& p) const {
+  const Eigen::Vector2d d = p - Vertex();
+  return std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) <= half_angle_rad;
+}
+
 bool Coverage::Contains(const Eigen::Vector2d& p) const {
   if (sectors.empty()) return true;
   for (const Sector& s : sectors) {
-    const Eigen::Vector2d d = p - s.apex;
-    double a = std::atan2(d.x(), d.y()) - s.direction_rad;
-    a = std::remainder(a, 2 * kPi);
-    if (std::abs(a) <= s.half_angle_rad) return true;
+    if (s.Contains(p)) return true;
   }
   return false;
 }

@@ -38,10 +38,11 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
   const cv::Scalar shades[] = {cv::Scalar(235, 245, 225), cv::Scalar(240, 230, 250), cv::Scalar(225, 240, 250)};
   int k = 0;
   for (const Sector& s : coverage.sectors) {
-    std::vector<cv::Point> poly{to_px(s.apex.x(), s.apex.y())};
+    const Eigen::Vector2d v = s.Vertex();
+    std::vector<cv::Point> poly{to_px(v.x(), v.y())};
     for (int i = 0; i <= 24; ++i) {
       const double a = s.direction_rad - s.half_angle_rad + 2 * s.half_angle_rad * i / 24.0;
-      poly.push_back(to_px(s.apex.x() + 2 * o.range_m * std::sin(a), s.apex.y() + 2 * o.range_m * std::cos(a)));
+      poly.push_back(to_px(v.x() + 2 * o.range_m * std::sin(a), v.y() + 2 * o.range_m * std::cos(a)));
     }
     cv::Mat layer = map.clone();
     cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{poly}, shades[k++ % 3]);

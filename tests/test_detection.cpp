@@ -348,12 +348,50 @@ void TestDriftCorrection() {
 
 }  // namespace
 
+// The front pair's field of view is where both cameras' views overlap: a point counts exactly
+// when it lies within the half-angle of the view axis seen from each camera — also with the right
+// camera 0.4 m further back (the front view's axis then turns with the baseline).
+void TestFrontCoverage() {
+  for (const double right_dz : {0.0, -0.4}) {
+    dps::Rig rig = dps::ReadRig(kSource + "/data/rigs/omni_pair.yaml");
+    for (dps::RigCamera& c : rig.cameras) {
+      if (c.name == "right") c.vehicle_from_camera.t.z() += right_dz;
+    }
+    dps::PipelineOptions o = dps::DefaultPipelineOptions(rig);
+    o.sides = false;
+    const dps::Coverage coverage = dps::PipelineCoverage(rig, o);
+    CHECK_EQ(coverage.sectors.size(), size_t(1));
+    const dps::Sector& front = coverage.sectors[0];
+    CHECK_NEAR(front.half_angle_rad, std::atan(200.0 / 170.0), 1e-12);
+    if (right_dz == 0.0) {  // from the midpoint, overlapping (B / 2) / tan(half) ahead of it
+      CHECK_NEAR(front.apex.x(), 0.0, 1e-9);
+      CHECK_NEAR(front.apex.y(), 0.9, 1e-9);
+      CHECK_NEAR(front.start_m, 1.0 * 170.0 / 200.0, 1e-9);
+    }
+    int inside = 0, mismatches = 0;
+    for (double x = -8; x <= 8; x += 0.25) {
+      for (double z = -2; z <= 12; z += 0.25) {
+        bool both = true;
+        for (const dps::RigCamera& c : rig.cameras) {
+          const double a = std::atan2(x - c.vehicle_from_camera.t.x(), z - c.vehicle_from_camera.t.z());
+          both = both && std::abs(std::remainder(a - front.direction_rad, 2 * M_PI)) <= front.half_angle_rad;
+        }
+        inside += both;
+        mismatches += both != coverage.Contains({x, z});
+      }
+    }
+    CHECK(inside > 1000);
+    CHECK(mismatches <= 2);  // points on an edge, to rounding
+  }
+}
+
 int main() {
   TestHistogram();
   TestLinking();
   TestFrontProjection();
   TestFusion();
   TestEvaluation();
+  TestFrontCoverage();
   TestRenderedFront();
   TestDriftCorrection();
   return dps_test::Report();

@@ -21,9 +21,10 @@ objects first. A detection in the zone that matches an object not counted (near 
 zone, part of it inside) is a true detection: it counts for precision, the object not for recall.
 Prints recall, precision and range errors per range band and per source.
 
-Field of view: with --rig, the sectors the default pipeline's views cover (the front pair from the
-cameras' midpoint, each side view from its camera, each +-atan(width / 2f)); without it, every
-direction counts.
+Field of view: with --rig, the sectors the default pipeline's views cover, each +-atan(width / 2f):
+the front pair where both cameras' views overlap (a sector from where the left view's right edge
+crosses the right view's left edge), each side view from its camera; without it, every direction
+counts.
 
   --detections FILE   detections.csv
   --tracks FILE       tracks.csv: scored the same way on (x, z), plus the median velocity error

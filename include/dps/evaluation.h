@@ -15,7 +15,8 @@
 //
 // Field of view: the pipeline's views are sectors on the ground, each an apex (the viewpoint,
 // or the front pair's midpoint), a direction and a half-angle (atan of half the view width over
-// the focal length). Without a coverage every direction counts.
+// the focal length); the front pair's begins ahead of its apex, where both views overlap.
+// Without a coverage every direction counts.
 #pragma once
 
 #include <string>
@@ -30,9 +31,14 @@ namespace dps {
 
 struct Sector {
   std::string name;               // "front", "left", "right"
-  Eigen::Vector2d apex{0, 0};     // vehicle frame (x, z)
+  Eigen::Vector2d apex{0, 0};     // where the source looks from, vehicle frame (x, z)
   double direction_rad = 0.0;     // from +Z towards +X
   double half_angle_rad = 0.0;
+  // The sector begins this far ahead of the apex along its direction, at its vertex: a stereo
+  // pair sees only where both views overlap, from where their inner edges cross.
+  double start_m = 0.0;
+  Eigen::Vector2d Vertex() const;
+  bool Contains(const Eigen::Vector2d& point) const;
 };
 
 struct Coverage {

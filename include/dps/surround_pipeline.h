@@ -36,7 +36,8 @@ struct PipelineOptions {
 PipelineOptions DefaultPipelineOptions(const Rig& rig);
 
 // The ground sectors the pipeline's views cover (for the map and for dps-eval's field of view):
-// the front pair from the cameras' midpoint, each side view from its camera.
+// the front pair from the cameras' midpoint, beginning where both cameras' views overlap; each
+// side view from its camera.
 Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& options);
 
 // One frame's input: both omni images and, for motion stereo, the vehicle's motion since the
