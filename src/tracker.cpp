@@ -33,6 +33,81 @@ void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovati
   t->P = (Cov::Identity() - K * H) * t->P;
 }
 
+bool RegisterPoints(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+                    const Eigen::Vector2d& initial, double gate_m, double min_overlap, Eigen::Vector2d* shift,
+                    double* rms_m) {
+  if (from.size() < 3 || to.size() < 3) return false;
+  Eigen::Vector2d s = initial;
+  int pairs = 0;
+  double sum_d2 = 0.0;
+  for (int round = 0; round < 10; ++round) {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    pairs = 0;
+    sum_d2 = 0.0;
+    for (const Eigen::Vector2d& p : from) {
+      const Eigen::Vector2d moved = p + s;
+      const Eigen::Vector2d* nearest = nullptr;
+      double best = gate_m * gate_m;
+      for (const Eigen::Vector2d& q : to) {
+        const double d2 = (q - moved).squaredNorm();
+        if (d2 <= best) best = d2, nearest = &q;
+      }
+      if (!nearest) continue;
+      sum += *nearest - p;
+      sum_d2 += best;
+      ++pairs;
+    }
+    if (pairs < 3) return false;
+    const Eigen::Vector2d next = sum / pairs;
+    const bool settled = (next - s).norm() < 1e-6;
+    s = next;
+    if (settled) break;
+  }
+  if (pairs < min_overlap * from.size()) return false;
+  *shift = s;
+  *rms_m = std::sqrt(sum_d2 / pairs);
+  return true;
+}
+
+// The registration velocity (see tracker.h) from this hit's points, then this hit kept.
+void Tracker::ApplyRegistration(double t_s, const std::vector<Eigen::Vector2d>& points, bool cut,
+                                const Eigen::Matrix2d& world_from_vehicle, Track* t) const {
+  if (options_.registration_span_s <= 0) return;
+  const double span = options_.registration_span_s;
+  for (const auto& [t_old, old_points] : t->shapes) {  // oldest first
+    const double dt = t_s - t_old;
+    if (dt < 0.99 * span || dt > 2 * span) continue;
+    Eigen::Vector2d shift;
+    double rms = 0.0;
+    if (RegisterPoints(old_points, points, t->x.segment<2>(2) * dt, options_.registration_gate_m,
+                       options_.registration_min_overlap, &shift, &rms)) {
+      const double sigma = (options_.registration_sigma_m + rms) / dt;
+      // The shift is the mean velocity over dt: the velocity now differs from it by the
+      // acceleration over about dt / 2.
+      const Eigen::Matrix2d R = Eigen::Matrix2d::Identity() * sigma * sigma + AccelCovariance(*t, world_from_vehicle) * (dt * dt / 4);
+      const Eigen::Vector2d innovation = shift / dt - t->x.segment<2>(2);
+      if (cut) {
+        const Eigen::Vector2d a = Axis(*t, world_from_vehicle), n(-a.y(), a.x());
+        Eigen::Matrix<double, 1, 5> H;
+        H << 0, 0, n.x(), n.y(), 0;
+        ScalarUpdate(H, n.dot(innovation), n.dot(R * n), options_.gate_chi2, t);
+      } else {
+        Eigen::Matrix<double, 2, 5> H = Eigen::Matrix<double, 2, 5>::Zero();
+        H(0, 2) = H(1, 3) = 1;
+        const Eigen::Matrix2d S = H * t->P * H.transpose() + R;
+        if (innovation.dot(S.ldlt().solve(innovation)) <= options_.gate_chi2) {
+          const Eigen::Matrix<double, 5, 2> K = t->P * H.transpose() * S.inverse();
+          t->x += K * innovation;
+          t->P = (Cov::Identity() - K * H) * t->P;
+        }
+      }
+    }
+    break;
+  }
+  t->shapes.push_back({t_s, points});
+  while (t_s - t->shapes.front().first > 2 * span) t->shapes.erase(t->shapes.begin());
+}
+
 void TrackerOptions::Check() const {
   const OptionCheck Require("tracker");
   Require(accel_sigma_mps2 > 0, "accel_sigma_mps2", accel_sigma_mps2, "> 0");
@@ -50,6 +125,11 @@ void TrackerOptions::Check() const {
   Require(init_across_speed_sigma_mps > 0, "init_across_speed_sigma_mps", init_across_speed_sigma_mps, "> 0");
   Require(gate_chi2 > 0, "gate_chi2", gate_chi2, "> 0");
   Require(motion_gate_chi2 > 0, "motion_gate_chi2", motion_gate_chi2, "> 0");
+  Require(registration_span_s >= 0, "registration_span_s", registration_span_s, ">= 0");
+  Require(registration_sigma_m > 0, "registration_sigma_m", registration_sigma_m, "> 0");
+  Require(registration_gate_m > 0, "registration_gate_m", registration_gate_m, "> 0");
+  Require(registration_min_overlap >= 0 && registration_min_overlap <= 1, "registration_min_overlap",
+          registration_min_overlap, "in [0, 1]");
   Require(confirm_hits >= 1, "confirm_hits", confirm_hits, ">= 1");
   Require(max_misses >= 1, "max_misses", max_misses, ">= 1");
   Require(predict_ahead_s >= 0, "predict_ahead_s", predict_ahead_s, ">= 0");
@@ -275,6 +355,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
       t.P = (Cov::Identity() - K * H) * t.P;
     }
     ApplyMotion(detections[j], Rwv, options_.motion_gate_chi2, &t);
+    ApplyRegistration(t_s, points[j], !clipped_ends[j].empty(), Rwv, &t);
     ++t.hits;
     t.misses = 0;
     if (t.hits >= options_.confirm_hits) t.confirmed = true;
@@ -293,6 +374,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     t.P.block<2, 2>(2, 2) = Rwv * sigma_v.cwiseAbs2().asDiagonal() * Rwv.transpose();
     t.P(4, 4) = options_.init_turn_sigma_radps * options_.init_turn_sigma_radps;
     ApplyMotion(detections[j], Rwv, std::numeric_limits<double>::infinity(), &t);
+    ApplyRegistration(t_s, points[j], !clipped_ends[j].empty(), Rwv, &t);
     t.hits = 1;
     t.confirmed = options_.confirm_hits <= 1;
     tracks_.push_back(t);

@@ -12,12 +12,20 @@
 // are an end where the view cut the object (Detection::clipped_ends), the followed point may be
 // out of view beyond it and only the offset across the axis is measured. Side detections add
 // their motion-stereo velocity along the camera's displacement as a gated scalar measurement.
+// Every hit also measures the velocity from the object's shape: the detection's points are
+// registered onto those of a hit about registration_span_s earlier (RegisterPoints), and the shift
+// over the time between is a velocity measurement. The followed point alone cannot see an object
+// slide along its own face (a car ahead seen as one row of points across the road: the point
+// nearest to a drifting prediction drifts with it); the registered shape can, by its ends. When a
+// view's edge cut the detection, that end moves with the view: only the velocity across the
+// track's axis is measured then.
 // Detections are assigned to tracks by the Hungarian method on the Mahalanobis distance, within
 // a chi-square gate. A track is born from an unassigned detection, confirmed after
 // `confirm_hits` hits and deleted after `max_misses` frames without one.
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -57,6 +65,16 @@ struct TrackerOptions {
   double init_across_speed_sigma_mps = 1.0;
   double gate_chi2 = 9.21;            // Mahalanobis gate (2 dof, 99 %), > 0
   double motion_gate_chi2 = 6.63;     // gate of a motion-stereo velocity (1 dof, 99 %), > 0
+  // Velocity by registration (see above): the earlier hit is the oldest at least span and at
+  // most twice span old (0 = no registration velocity); points pair with their nearest
+  // neighbour within gate_m; at least min_overlap of the earlier points must pair. The
+  // measurement's standard deviation is (sigma_m + the pairs' RMS distance) / the time between,
+  // combined with the velocity change over half that time at accel_sigma_mps2 (the shift is the
+  // mean velocity over the interval); gated like the positions (gate_chi2).
+  double registration_span_s = 0.2;   // >= 0
+  double registration_sigma_m = 0.4;  // > 0
+  double registration_gate_m = 0.75;  // > 0
+  double registration_min_overlap = 0.6;  // 0..1
   int confirm_hits = 3;               // >= 1
   int max_misses = 5;                 // >= 1
   double predict_ahead_s = 1.0;       // the predicted position reported with each track, >= 0
@@ -97,12 +115,16 @@ class Tracker {
     Cov P;
     int hits = 0, misses = 0, age = 0;
     bool confirmed = false;
+    // The last hits' times and ground points (world), for the registration velocity.
+    std::vector<std::pair<double, std::vector<Eigen::Vector2d>>> shapes;
   };
   Eigen::Vector2d Axis(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const;
   Eigen::Matrix2d AccelCovariance(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const;
   Cov ProcessNoise(const Eigen::Matrix2d& accel, double dt) const;
   static State Predict(const State& x, double dt, Cov* F);
   static void ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, double gate_chi2, Track* t);
+  void ApplyRegistration(double t_s, const std::vector<Eigen::Vector2d>& points, bool cut,
+                         const Eigen::Matrix2d& world_from_vehicle, Track* t) const;
   static void ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
                            Track* t);
   TrackerOptions options_;
@@ -111,6 +133,15 @@ class Tracker {
   double last_t_ = 0.0;
   bool started_ = false;
 };
+
+// Registers point set `from` onto `to` by a translation (iterative closest points): starting at
+// `initial`, each point of `from` moved by the shift pairs with its nearest point of `to` if
+// within gate_m, and the shift becomes the pairs' mean offset; ten rounds or until it settles.
+// True when at least 3 points and min_overlap of `from` pair at the end; then *shift and
+// *rms_m (the pairs' root mean square distance) are set.
+bool RegisterPoints(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+                    const Eigen::Vector2d& initial, double gate_m, double min_overlap, Eigen::Vector2d* shift,
+                    double* rms_m);
 
 // The minimum-cost assignment of rows to columns (Hungarian method). cost: rows x cols; entries
 // >= `forbidden` may not be used. Returns for each row its column or -1.
