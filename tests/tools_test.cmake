@@ -85,9 +85,14 @@ foreach(f detections.csv tracks.csv summary.json)
   endif()
 endforeach()
 expect(0 "band \\(m\\)" "${TOOLS}/dps-eval" --detections "${WORK}/results/lead/detections.csv"
-       --truth "${WORK}/drives/lead/truth.csv" --rig "${WORK}/drives/lead/rig.yaml" --json "${WORK}/scores.json")
+       --truth "${WORK}/drives/lead/truth.csv" --rig "${WORK}/drives/lead/rig.yaml" --json "${WORK}/scores.json"
+       --errors "${WORK}/errors.csv")
 if(NOT EXISTS "${WORK}/scores.json")
   message(FATAL_ERROR "dps-eval wrote no --json file")
+endif()
+file(READ "${WORK}/errors.csv" errors)
+if(NOT errors MATCHES "^frame,error,id,kind,x,z,range\n")
+  message(FATAL_ERROR "dps-eval --errors wrote no error list: ${errors}")
 endif()
 # --force redoes a complete drive; --list adds drives from a file; --shard I/N takes every N-th
 # drive of the list from I, so two shards process each drive once between them.
