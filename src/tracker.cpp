@@ -33,6 +33,16 @@ void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovati
   t->P = (Cov::Identity() - K * H) * t->P;
 }
 
+// A measurement of H x in two dimensions: its innovation and covariance; skipped outside the gate.
+void Tracker::VectorUpdate(const Eigen::Matrix<double, 2, 5>& H, const Eigen::Vector2d& innovation,
+                           const Eigen::Matrix2d& covariance, double gate_chi2, Track* t) {
+  const Eigen::Matrix2d S = H * t->P * H.transpose() + covariance;
+  if (innovation.dot(S.ldlt().solve(innovation)) > gate_chi2) return;
+  const Eigen::Matrix<double, 5, 2> K = t->P * H.transpose() * S.inverse();
+  t->x += K * innovation;
+  t->P = (Cov::Identity() - K * H) * t->P;
+}
+
 bool RegisterPoints(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
                     const Eigen::Vector2d& initial, double gate_m, double min_overlap, Eigen::Vector2d* shift,
                     double* rms_m) {
@@ -84,7 +94,8 @@ void Tracker::ApplyRegistration(double t_s, const std::vector<Eigen::Vector2d>& 
       const double sigma = (options_.registration_sigma_m + rms) / dt;
       // The shift is the mean velocity over dt: the velocity now differs from it by the
       // acceleration over about dt / 2.
-      const Eigen::Matrix2d R = Eigen::Matrix2d::Identity() * sigma * sigma + AccelCovariance(*t, world_from_vehicle) * (dt * dt / 4);
+      const Eigen::Matrix2d R =
+          Eigen::Matrix2d::Identity() * sigma * sigma + AccelCovariance(*t, world_from_vehicle) * (dt * dt / 4);
       const Eigen::Vector2d innovation = shift / dt - t->x.segment<2>(2);
       if (cut) {
         const Eigen::Vector2d a = Axis(*t, world_from_vehicle), n(-a.y(), a.x());
@@ -94,12 +105,7 @@ void Tracker::ApplyRegistration(double t_s, const std::vector<Eigen::Vector2d>& 
       } else {
         Eigen::Matrix<double, 2, 5> H = Eigen::Matrix<double, 2, 5>::Zero();
         H(0, 2) = H(1, 3) = 1;
-        const Eigen::Matrix2d S = H * t->P * H.transpose() + R;
-        if (innovation.dot(S.ldlt().solve(innovation)) <= options_.gate_chi2) {
-          const Eigen::Matrix<double, 5, 2> K = t->P * H.transpose() * S.inverse();
-          t->x += K * innovation;
-          t->P = (Cov::Identity() - K * H) * t->P;
-        }
+        VectorUpdate(H, innovation, R, options_.gate_chi2, t);
       }
     }
     break;
@@ -346,13 +352,10 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
       ScalarUpdate(H, across[i].dot(m.point - t.x.head<2>()), across[i].dot(R[j] * across[i]),
                    std::numeric_limits<double>::infinity(), &t);
     } else {
-      // Update (H = [I 0]).
-      const Eigen::Matrix2d S = t.P.topLeftCorner<2, 2>() + R[j];
-      const Eigen::Matrix<double, 5, 2> K = t.P.leftCols<2>() * S.inverse();
-      t.x += K * (m.point - t.x.head<2>());
+      // Update (H = [I 0]); gated already by the assignment.
       Eigen::Matrix<double, 2, 5> H = Eigen::Matrix<double, 2, 5>::Zero();
       H.leftCols<2>().setIdentity();
-      t.P = (Cov::Identity() - K * H) * t.P;
+      VectorUpdate(H, m.point - t.x.head<2>(), R[j], std::numeric_limits<double>::infinity(), &t);
     }
     ApplyMotion(detections[j], Rwv, options_.motion_gate_chi2, &t);
     ApplyRegistration(t_s, points[j], !clipped_ends[j].empty(), Rwv, &t);

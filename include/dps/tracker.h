@@ -127,6 +127,8 @@ class Tracker {
                          const Eigen::Matrix2d& world_from_vehicle, Track* t) const;
   static void ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
                            Track* t);
+  static void VectorUpdate(const Eigen::Matrix<double, 2, 5>& H, const Eigen::Vector2d& innovation,
+                           const Eigen::Matrix2d& covariance, double gate_chi2, Track* t);
   TrackerOptions options_;
   std::vector<Track> tracks_;
   int next_id_ = 1;
