@@ -86,6 +86,18 @@ std::vector<Contact> ConsistentContacts(std::vector<Contact> contacts, double mi
   return kept;
 }
 
+// Contacts (in column order) farther than max_jump from both neighbours on the ground are dropped.
+std::vector<Contact> ContinuousContacts(const std::vector<Contact>& contacts, double max_jump) {
+  if (contacts.size() < 3) return contacts;
+  std::vector<Contact> kept;
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const bool before = i > 0 && (contacts[i].ground - contacts[i - 1].ground).norm() <= max_jump;
+    const bool after = i + 1 < contacts.size() && (contacts[i].ground - contacts[i + 1].ground).norm() <= max_jump;
+    if (before || after) kept.push_back(contacts[i]);
+  }
+  return kept;
+}
+
 }  // namespace
 
 SideDetectorOptions::SideDetectorOptions() {
@@ -102,7 +114,10 @@ SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = true;
   options_.histogram.Check();
-  OptionCheck("side detector")(options.contact_trim_rows >= 0, "contact_trim_rows", options.contact_trim_rows, ">= 0");
+  const OptionCheck require("side detector");
+  require(options.contact_trim_rows >= 0, "contact_trim_rows", options.contact_trim_rows, ">= 0");
+  require(options.max_contact_jump_m > 0, "max_contact_jump_m", options.max_contact_jump_m, "> 0");
+  require(options.pacing_road_contrast_px > 0, "pacing_road_contrast_px", options.pacing_road_contrast_px, "> 0");
   matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
 }
 
@@ -230,9 +245,16 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
       k.x = x;
       k.y = lowest;
       // Depth and disparity of the lowest matched pixel (for the motion); the contact with the
-      // road, placed on the map, contact_trim_rows higher (vertical fattening).
+      // road, placed on the map, contact_trim_rows higher (vertical fattening; half a window for
+      // an object keeping pace with us over road of a different disparity).
       k.depth = ViewDepth(reference, g);
-      const int contact = std::max(0, lowest - options_.contact_trim_rows);
+      int trim = options_.contact_trim_rows;
+      const float road_here = road.at<float>(lowest, x);
+      if (std::abs(disparity) < options_.min_motion_disparity_px && std::isfinite(road_here) &&
+          std::abs(road_here - disparity) > options_.pacing_road_contrast_px) {
+        trim = std::max(trim, options_.stereo.block_height / 2);
+      }
+      const int contact = std::max(0, lowest - trim);
       if (contact != lowest && !PixelToGround(reference, x, contact, &g)) continue;
       k.ground = Eigen::Vector2d(g.x(), g.z());
       k.disparity = disparity;
@@ -240,6 +262,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
       contacts.push_back(k);
     }
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
+    contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
     std::vector<Eigen::Vector2d> points;
     std::vector<double> heights;
     for (const Contact& k : contacts) {

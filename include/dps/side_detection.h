@@ -61,6 +61,12 @@ struct SideDetectorOptions {
   // below min_motion_disparity_px.
   double motion_tolerance = 0.35;
   double min_motion_disparity_px = 3.0;
+  // A column whose contact lies farther than this from both neighbouring columns' contacts on
+  // the ground is dropped: its bottom-most pixel was a stray match, not where the object meets the
+  // road. The depth x disparity test above cannot catch it for objects keeping pace with us
+  // (disparity near zero), and one such point 3 m short becomes the detection's nearest point.
+  // m, > 0.
+  double max_contact_jump_m = 1.0;
   double disparity_sigma_px = 1.0;    // matching noise, for the velocity's uncertainty
   double max_gap_below_m = 0.6;
   double contact_tolerance_px = 1.5;
@@ -69,6 +75,12 @@ struct SideDetectorOptions {
   // >= 0. DefaultPipelineOptions: 2 with 9x9 windows (measured: the rendered cars' sides came
   // out 0.1-0.2 m too close at 640x480), 0 with 7x7 (no such bias at 320x240).
   int contact_trim_rows = 0;
+  // An object keeping pace with us (|disparity| below min_motion_disparity_px) over road whose
+  // disparity at the contact differs from the object's by more than this: the windows carry the
+  // object's disparity down over the road by up to half a window (measured: a car pacing us at
+  // 6-7 m in a turn was placed 1-1.5 m short), so the contact is taken half a window above the
+  // lowest pixel. px, > 0.
+  double pacing_road_contrast_px = 5.0;
 
   SideDetectorOptions();
 };
