@@ -1,7 +1,7 @@
 // Side obstacles by motion stereo (section V-B) on rendered frame pairs with known truth: a car
 // parked beside the road at 8 m/s and 15 fps (its disparity at full view size would exceed the
-// range, so the views shrink), and a car overtaking on the left (placed where it is in the
-// current frame, not where it was in the previous one).
+// range, so the views shrink), a car overtaking on the left (placed where it is in the
+// current frame, not where it was in the previous one), and a car keeping pace on the right.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -144,7 +144,8 @@ void TestPacingRight() {
   const dps::Detection& d = r.detections[0];
   std::vector<double> off;
   for (const Eigen::Vector2d& q : d.points) off.push_back(dps::DistanceToFootprint(p.truth, q));
-  const double nearest_off = dps::DistanceToFootprint(p.truth, {d.x_m, d.z_m}), truth_range = dps::NearPoint(p.truth).norm();
+  const double nearest_off = dps::DistanceToFootprint(p.truth, {d.x_m, d.z_m});
+  const double truth_range = dps::NearPoint(p.truth).norm();
   std::sort(off.begin(), off.end());
   std::printf("  %d points, p90 %.3f m / worst %.3f m off the footprint; nearest point %.3f m off, range %.3f m, "
               "truth %.3f m\n", d.n_points, off[off.size() * 9 / 10], off.back(), nearest_off, d.range_m, truth_range);
