@@ -20,6 +20,10 @@ void HistogramOptions::Check() const {
   Require(close_width >= 1 && close_width % 2 == 1, "close_width", close_width, "odd, >= 1");
   Require(close_height >= 1 && close_height % 2 == 1, "close_height", close_height, "odd, >= 1");
   Require(threshold > 0, "threshold", threshold, "> 0");
+  Require(far_reference_px >= 0, "far_reference_px", far_reference_px, ">= 0");
+  Require(far_min_fraction > 0 && far_min_fraction <= 1, "far_min_fraction", far_min_fraction, "in (0, 1]");
+  Require(far_clearance_columns >= 1 && far_clearance_columns % 2 == 1, "far_clearance_columns",
+          far_clearance_columns, "odd, >= 1");
   Require(min_columns >= 1, "min_columns", min_columns, ">= 1");
   Require(min_votes >= 0, "min_votes", min_votes, ">= 0");
   Require(link_max_gap >= 0, "link_max_gap", link_max_gap, ">= 0");
@@ -100,6 +104,16 @@ std::vector<HistogramComponent> FindComponents(const cv::Mat& histogram, const H
   cv::morphologyEx(smooth, smooth, cv::MORPH_CLOSE,
                    cv::getStructuringElement(cv::MORPH_RECT, cv::Size(o.close_width, o.close_height)));
   cv::Mat mask = smooth >= o.threshold;
+  if (o.far_reference_px > 0) {
+    cv::Mat far(smooth.size(), CV_8U), clear;
+    for (int b = 0; b < smooth.rows; ++b) {
+      const double fraction = std::clamp(BinDisparity(o, b) / o.far_reference_px, o.far_min_fraction, 1.0);
+      cv::Mat row = far.row(b);
+      cv::compare(smooth.row(b), cv::Scalar(o.threshold * fraction), row, cv::CMP_GE);
+    }
+    cv::dilate(mask, clear, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(o.far_clearance_columns, 3)));
+    mask |= far & ~clear;
+  }
   cv::Mat labels;
   const int count = cv::connectedComponents(mask, labels, 8, CV_32S);
   // Each label's columns, in one pass.

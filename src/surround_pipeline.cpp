@@ -36,6 +36,7 @@ PipelineOptions DefaultPipelineOptions(const Rig& rig) {
     st->block_width = st->block_height = block;
   }
   o.side.stereo.min_disparity = -(d * 5) / 12;  // -40 of 96
+  o.front.histogram.far_reference_px = d / 3.0;  // fewer votes needed below (disparity_histogram.h)
   o.side.contact_trim_rows = block >= 9 ? 2 : 0;  // side_detection.h
   o.front.view_width = o.side.view_width = w;
   o.front.view_height = o.side.view_height = h;

@@ -61,6 +61,37 @@ void TestHistogram() {
     CHECK(c[0].x_begin <= 31 && c[0].x_end >= 50);
     CHECK_NEAR(c[0].column_disparity[40 - c[0].x_begin], 12.3, 1e-4);  // exact centroid
   }
+  // Far bins need fewer votes: a strong component (bin 16, 20 votes per column, columns 10..20: 8
+  // after smoothing, its edge columns 2.4) and a weak far one (bin 6, 6 votes: 2.4 after
+  // smoothing, under the threshold of 4 but over 4 x max(0.4, 6.5 / 32) = 1.6).
+  {
+    cv::Mat far_hist(64, 80, CV_32F, cv::Scalar(0));
+    far_hist(cv::Range(16, 17), cv::Range(10, 21)).setTo(20.0f);
+    far_hist(cv::Range(6, 7), cv::Range(50, 61)).setTo(6.0f);
+    dps::HistogramOptions fo;
+    fo.max_disparity = 64;
+    const auto by_column = [&](const dps::HistogramOptions& options) {
+      std::vector<dps::HistogramComponent> c = dps::FindComponents(far_hist, options);
+      std::sort(c.begin(), c.end(), [](const auto& a, const auto& b) { return a.x_begin < b.x_begin; });
+      return c;
+    };
+    const std::vector<dps::HistogramComponent> one = by_column(fo);
+    fo.far_reference_px = 32;
+    const std::vector<dps::HistogramComponent> two = by_column(fo);
+    CHECK_EQ(one.size(), size_t{1});
+    CHECK_EQ(two.size(), size_t{2});
+    if (one.size() == 1 && two.size() == 2) {
+      // The strong one as before (its edges, over the lower threshold of its bin, 4 x 16.5 / 32 =
+      // 2.06, not taken); the weak one where it is, at its disparity (bin centre 6.5).
+      CHECK_EQ(two[0].x_begin, one[0].x_begin);
+      CHECK_EQ(two[0].x_end, one[0].x_end);
+      CHECK(two[1].x_begin >= 48 && two[1].x_begin <= 50 && two[1].x_end >= 61 && two[1].x_end <= 63);
+      CHECK_NEAR(two[1].column_disparity[55 - two[1].x_begin], 6.5, 1e-4);
+    }
+    fo.far_clearance_columns = 1;  // no clearance: the strong one's edges pass the lower threshold
+    const std::vector<dps::HistogramComponent> fat = by_column(fo);
+    CHECK(!fat.empty() && !one.empty() && fat[0].x_end - fat[0].x_begin > one[0].x_end - one[0].x_begin);
+  }
   // Too few votes: nothing.
   o.min_votes = 1e6;
   CHECK(dps::FindComponents(hist, o).empty());

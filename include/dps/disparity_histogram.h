@@ -33,6 +33,13 @@ struct HistogramOptions {
   int close_width = 5;             // morphological closing, columns (odd, >= 1)
   int close_height = 3;            // ... and bins (odd, >= 1)
   double threshold = 4.0;          // votes a smoothed bin needs, > 0
+  // Far obstacles cover fewer rows (rows ~ height x d / B), so bins below far_reference_px need
+  // fewer votes: threshold x max(far_min_fraction, d / far_reference_px) — only where the full
+  // threshold found nothing within far_clearance_columns columns and one bin (else the edges of
+  // near components fatten). far_reference_px = 0: one threshold for all bins.
+  double far_reference_px = 0.0;  // >= 0
+  double far_min_fraction = 0.4;  // (0, 1]
+  int far_clearance_columns = 15; // odd, >= 1
   int min_columns = 3;             // narrower components are dropped, >= 1
   double min_votes = 30.0;         // components with fewer votes in all are dropped, >= 0
   // Linking (LinkComponents): side-by-side components at most link_max_gap columns apart, whose
