@@ -6,8 +6,6 @@
 #include <cmath>
 #include <exception>
 
-#include <Eigen/LU>
-
 #include <opencv2/core/utility.hpp>
 
 #include "dps/error.h"
@@ -50,16 +48,13 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
   const ViewSpec front = FrontViewSpec(rig, "left", "right", o.front.view_width, o.front.view_height, o.front.focal_px);
   const Eigen::Vector3d dir = front.vehicle_from_view.col(2);
   // Binocular stereo sees what both views see. They share the axis and the half-angle, so their
-  // overlap is a sector from where the left view's right edge crosses the right view's left edge
-  // (0.85 m ahead of the cameras' midpoint for cameras 2 m apart and +-49.6 degrees).
+  // overlap is a sector from where the left view's right edge crosses the right view's left edge:
+  // each edge closes tan(half) across the axis per metre along it, so they meet half the cameras'
+  // separation across the axis, over tan(half), ahead of the midpoint (0.85 m for cameras 2 m
+  // apart and +-49.6 degrees), whatever their offset along the axis.
   const double axis = std::atan2(dir.x(), dir.z()), half = std::atan(o.front.view_width / 2.0 / o.front.focal_px);
-  const Eigen::Vector2d lg(l.x(), l.z()), rg(r.x(), r.z()), mid = (lg + rg) / 2;
-  const Eigen::Vector2d left_edge(std::sin(axis + half), std::cos(axis + half));
-  const Eigen::Vector2d right_edge(std::sin(axis - half), std::cos(axis - half));
-  Eigen::Matrix2d m;
-  m << left_edge, -right_edge;
-  const Eigen::Vector2d crossing = lg + (m.inverse() * (rg - lg))[0] * left_edge;
-  c.sectors.push_back({"front", mid, axis, half, (crossing - mid).dot(Eigen::Vector2d(std::sin(axis), std::cos(axis)))});
+  const Eigen::Vector2d lg(l.x(), l.z()), rg(r.x(), r.z()), across(std::cos(axis), -std::sin(axis));
+  c.sectors.push_back({"front", (lg + rg) / 2, axis, half, across.dot(rg - lg) / 2 / std::tan(half)});
   if (o.sides) {
     const double half = std::atan(o.side.view_width / 2.0 / o.side.focal_px);
     const double pi = 3.14159265358979323846;
