@@ -24,10 +24,23 @@ void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_
 }
 
 // One scalar measurement of H x: its innovation and variance; skipped outside the gate.
+double Tracker::StandingProbability(const Track& t) { return 1.0 / (1.0 + std::exp(-t.standing_log_odds)); }
+
 void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
                            Track* t) {
   const double S = (H * t->P * H.transpose())(0, 0) + variance;
   if (innovation * innovation > gate_chi2 * S) return;
+  // The same measurement (value innovation + H x) under the standing model, whose state is the
+  // position alone (velocity 0): the models' likelihood ratio, then its own update.
+  const Eigen::Matrix<double, 1, 2> Hs = H.leftCols<2>();
+  const double is = innovation + (H * t->x)(0, 0) - (Hs * t->standing)(0, 0);
+  const double Ss = (Hs * t->standing_P * Hs.transpose())(0, 0) + variance;
+  t->standing_log_odds += 0.5 * (innovation * innovation / S + std::log(S)) - 0.5 * (is * is / Ss + std::log(Ss));
+  if (Hs.squaredNorm() > 0) {
+    const Eigen::Vector2d Ks = t->standing_P * Hs.transpose() / Ss;
+    t->standing += Ks * is;
+    t->standing_P = (Eigen::Matrix2d::Identity() - Ks * Hs) * t->standing_P;
+  }
   const Eigen::Matrix<double, 5, 1> K = t->P * H.transpose() / S;
   t->x += K * innovation;
   t->P = (Cov::Identity() - K * H) * t->P;
@@ -37,7 +50,19 @@ void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovati
 void Tracker::VectorUpdate(const Eigen::Matrix<double, 2, 5>& H, const Eigen::Vector2d& innovation,
                            const Eigen::Matrix2d& covariance, double gate_chi2, Track* t) {
   const Eigen::Matrix2d S = H * t->P * H.transpose() + covariance;
-  if (innovation.dot(S.ldlt().solve(innovation)) > gate_chi2) return;
+  const double d2 = innovation.dot(S.ldlt().solve(innovation));
+  if (d2 > gate_chi2) return;
+  // The standing model, as in ScalarUpdate.
+  const Eigen::Matrix2d Hs = H.leftCols<2>();
+  const Eigen::Vector2d is = innovation + H * t->x - Hs * t->standing;
+  const Eigen::Matrix2d Ss = Hs * t->standing_P * Hs.transpose() + covariance;
+  t->standing_log_odds += 0.5 * (d2 + std::log(S.determinant())) -
+                          0.5 * (is.dot(Ss.ldlt().solve(is)) + std::log(Ss.determinant()));
+  if (Hs.squaredNorm() > 0) {
+    const Eigen::Matrix2d Ks = t->standing_P * Hs.transpose() * Ss.inverse();
+    t->standing += Ks * is;
+    t->standing_P = (Eigen::Matrix2d::Identity() - Ks * Hs) * t->standing_P;
+  }
   const Eigen::Matrix<double, 5, 2> K = t->P * H.transpose() * S.inverse();
   t->x += K * innovation;
   t->P = (Cov::Identity() - K * H) * t->P;
@@ -139,6 +164,8 @@ void TrackerOptions::Check() const {
   Require(confirm_hits >= 1, "confirm_hits", confirm_hits, ">= 1");
   Require(max_misses >= 1, "max_misses", max_misses, ">= 1");
   Require(predict_ahead_s >= 0, "predict_ahead_s", predict_ahead_s, ">= 0");
+  Require(model_switch_per_s >= 0, "model_switch_per_s", model_switch_per_s, ">= 0");
+  Require(standing_drift_sigma > 0, "standing_drift_sigma", standing_drift_sigma, "> 0");
 }
 
 std::vector<int> HungarianAssignment(const std::vector<std::vector<double>>& cost, double forbidden) {
@@ -252,10 +279,17 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   last_t_ = t_s;
   const Eigen::Matrix2d Rwv = BodyToWorldRotation(ego);
   // Predict (constant turn, white acceleration noise, smaller across the track's axis).
+  const double switch_probability = 1.0 - std::exp(-options_.model_switch_per_s * dt);
   for (Track& t : tracks_) {
     Cov F;
     t.x = Predict(t.x, dt, &F);
     t.P = F * t.P * F.transpose() + ProcessNoise(AccelCovariance(t, Rwv), dt);
+    // The standing model: the object may have started or stopped since, and its followed point
+    // drifts a little.
+    const double standing = StandingProbability(t);
+    const double next = std::clamp(standing + switch_probability * (1 - 2 * standing), 1e-9, 1 - 1e-9);
+    t.standing_log_odds = std::log(next / (1 - next));
+    t.standing_P += Eigen::Matrix2d::Identity() * options_.standing_drift_sigma * options_.standing_drift_sigma * dt;
     ++t.age;
   }
   // Measurements in the world. A track follows one point of its object: the measurement for a
@@ -373,6 +407,8 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     t.x << z[j], 0, 0, 0;
     t.P = Cov::Zero();
     t.P.topLeftCorner<2, 2>() = R[j];
+    t.standing = z[j];
+    t.standing_P = R[j];
     const Eigen::Vector2d sigma_v(options_.init_across_speed_sigma_mps, options_.init_speed_sigma_mps);
     t.P.block<2, 2>(2, 2) = Rwv * sigma_v.cwiseAbs2().asDiagonal() * Rwv.transpose();
     t.P(4, 4) = options_.init_turn_sigma_radps * options_.init_turn_sigma_radps;
@@ -390,7 +426,10 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     s.frame = frame;
     s.t_s = t_s;
     s.id = t.id;
-    const Eigen::Vector2d p = WorldToBody(ego, t.x.head<2>()), v = WorldToBodyDirection(ego, t.x.segment<2>(2));
+    // The velocity reported is the models' mixture: the moving model's, times its probability.
+    State x = t.x;
+    if (options_.model_switch_per_s > 0) x.segment<2>(2) *= 1.0 - StandingProbability(t);
+    const Eigen::Vector2d p = WorldToBody(ego, x.head<2>()), v = WorldToBodyDirection(ego, x.segment<2>(2));
     const Eigen::Matrix2d cov = Rv * t.P.topLeftCorner<2, 2>() * Rv.transpose();
     s.x_m = p.x();
     s.z_m = p.y();
@@ -403,7 +442,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     // Prediction ahead, in the current vehicle frame (the ego's own motion is not predicted).
     const double h = options_.predict_ahead_s;
     Cov Fh;
-    const State xh = Predict(t.x, h, &Fh);
+    const State xh = Predict(x, h, &Fh);
     const Cov Ph = Fh * t.P * Fh.transpose() + ProcessNoise(AccelCovariance(t, Rwv), h);
     s.predicted = WorldToBody(ego, xh.head<2>());
     s.predicted_cov = Rv * Ph.topLeftCorner<2, 2>() * Rv.transpose();

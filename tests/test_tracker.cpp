@@ -284,6 +284,56 @@ void TestCreepingEdge() {
   CHECK(without > 0.45);
 }
 
+// An object ahead seen with noisy positions (0.6 m per axis, as a far car's nearest point
+// jumps) while we drive at 8 m/s: standing still until start_s, then driving off along the road
+// at 6 m/s. Returns the median error of the reported velocity over frames [from, to).
+double NoisyObjectVelocityError(double model_switch_per_s, double start_s, int from, int to) {
+  dps::TrackerOptions o;
+  o.model_switch_per_s = model_switch_per_s;
+  dps::Tracker tracker(o);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.6);
+  const double dt = 1.0 / 15, ego_speed = 8.0, speed = 6.0;
+  std::vector<double> errors;
+  for (int f = 0; f < to; ++f) {
+    const double t = f * dt;
+    const dps::PlanarPose ego{0.0, ego_speed * t, 0.0};
+    const double moved = std::max(0.0, t - start_s) * speed;
+    const Eigen::Vector2d world(1.5, 40.0 + moved), velocity(0.0, t >= start_s ? speed : 0.0);
+    const Eigen::Vector2d v = dps::WorldToBody(ego, world);
+    dps::Detection d = dps::DetectionFromPoints({{v.x() + noise(rng), v.y() + noise(rng)}}, "front");
+    d.frame = f;
+    for (const dps::TrackState& s : tracker.Update(f, t, ego, {d})) {
+      if (s.confirmed && f >= from) errors.push_back((Eigen::Vector2d(s.vx_mps, s.vz_mps) - velocity).norm());
+    }
+  }
+  if (errors.empty()) return 1e9;
+  std::sort(errors.begin(), errors.end());
+  return errors[errors.size() / 2];
+}
+
+void TestStandingModel() {
+  const double on = dps::TrackerOptions().model_switch_per_s;
+  // Standing all along: the standing model holds the velocity near zero.
+  const double standing = NoisyObjectVelocityError(on, 1e9, 10, 60);
+  const double standing_moving_only = NoisyObjectVelocityError(0.0, 1e9, 10, 60);
+  std::printf("standing object, noisy positions: median velocity error %.3f m/s (standing model), %.3f m/s "
+              "(moving model only)\n", standing, standing_moving_only);
+  CHECK(standing < 0.15 && standing < 0.5 * standing_moving_only);
+  // Driving all along: the same as with the moving model alone.
+  const double driving = NoisyObjectVelocityError(on, 0.0, 10, 60);
+  const double driving_moving_only = NoisyObjectVelocityError(0.0, 0.0, 10, 60);
+  std::printf("driving object: %.3f m/s (standing model), %.3f m/s (moving model only)\n", driving,
+              driving_moving_only);
+  CHECK(driving < driving_moving_only + 0.05);
+  // Driving off after 2 s: within a second the velocity is the moving one again.
+  const double started = NoisyObjectVelocityError(on, 2.0, 45, 75);
+  const double started_moving_only = NoisyObjectVelocityError(0.0, 2.0, 45, 75);
+  std::printf("driving off after 2 s, from 1 s after: %.3f m/s (standing model), %.3f m/s (moving model only)\n",
+              started, started_moving_only);
+  CHECK(started < started_moving_only + 0.2);
+}
+
 int main() {
   TestHungarian();
   TestTracks();
@@ -292,5 +342,6 @@ int main() {
   TestTurning();
   TestRegisterPoints();
   TestCreepingEdge();
+  TestStandingModel();
   return dps_test::Report();
 }

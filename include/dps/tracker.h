@@ -75,6 +75,14 @@ struct TrackerOptions {
   double registration_sigma_m = 0.4;  // > 0
   double registration_gate_m = 0.75;  // > 0
   double registration_min_overlap = 0.6;  // 0..1
+  // Standing or moving: beside the moving (constant-turn) filter each track keeps a standing one
+  // (its followed point fixed in the world, drifting by standing_drift_sigma m per sqrt(s)) and the
+  // probability of each from how well it predicted every measurement, the models switching at
+  // model_switch_per_s (0 = moving model only). The reported velocity is the moving model's times
+  // its probability: a parked car's noisy or sliding followed point no longer reads as motion,
+  // while a vehicle passing at speed is told from a standing one within a few frames.
+  double model_switch_per_s = 0.1;    // >= 0
+  double standing_drift_sigma = 0.1;  // > 0
   int confirm_hits = 3;               // >= 1
   int max_misses = 5;                 // >= 1
   double predict_ahead_s = 1.0;       // the predicted position reported with each track, >= 0
@@ -115,6 +123,11 @@ class Tracker {
     Cov P;
     int hits = 0, misses = 0, age = 0;
     bool confirmed = false;
+    // The standing model: the followed point's position (world) and covariance, and the log odds
+    // of standing against moving.
+    Eigen::Vector2d standing{0, 0};
+    Eigen::Matrix2d standing_P = Eigen::Matrix2d::Identity();
+    double standing_log_odds = 0.0;
     // The last hits' times and ground points (world), for the registration velocity.
     std::vector<std::pair<double, std::vector<Eigen::Vector2d>>> shapes;
   };
@@ -122,6 +135,7 @@ class Tracker {
   Eigen::Matrix2d AccelCovariance(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const;
   Cov ProcessNoise(const Eigen::Matrix2d& accel, double dt) const;
   static State Predict(const State& x, double dt, Cov* F);
+  static double StandingProbability(const Track& t);
   static void ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, double gate_chi2, Track* t);
   void ApplyRegistration(double t_s, const std::vector<Eigen::Vector2d>& points, bool cut,
                          const Eigen::Matrix2d& world_from_vehicle, Track* t) const;
