@@ -130,27 +130,42 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
     // detection in the zone sees, and such a detection is not a false one.
     std::vector<const TruthRow*> objects, uncounted;
     for (const TruthRow* t : truth_by_frame[f]) (in_zone(NearPoint(*t)) ? objects : uncounted).push_back(t);
-    std::vector<const Detection*> dets;
-    for (const Detection* d : det_by_frame[f]) {
-      if (in_zone({d->x_m, d->z_m})) dets.push_back(d);
-    }
+    std::vector<const Detection*> dets, outside;
+    for (const Detection* d : det_by_frame[f]) (in_zone({d->x_m, d->z_m}) ? dets : outside).push_back(d);
     if (!dets.empty()) ++result.frames_with_detections;
     std::vector<int> det_match(dets.size(), -1);
-    const std::vector<int> object_match = MatchNearestFirst(objects, dets, &det_match);
+    std::vector<int> object_match = MatchNearestFirst(objects, dets, &det_match);
+    // A counted object no detection in the zone matched may still be matched by one just outside
+    // it (a car whose near point is 19.5 m away, detected at 20.3 m): §5 matches detections and
+    // objects without regard to the zone, which only decides what is counted.
+    std::vector<const TruthRow*> unmatched;
+    std::vector<size_t> unmatched_index;
+    for (size_t i = 0; i < objects.size(); ++i) {
+      if (object_match[i] < 0) unmatched.push_back(objects[i]), unmatched_index.push_back(i);
+    }
+    std::vector<int> outside_match(outside.size(), -1);
+    const std::vector<int> late = MatchNearestFirst(unmatched, outside, &outside_match);
     // Then the detections left over against the uncounted objects: det_seen[j] >= 0 when
     // detection j saw an object, counted or not.
     std::vector<int> det_seen = det_match;
     MatchNearestFirst(uncounted, dets, &det_seen);
+    std::vector<const Detection*> matched_by(objects.size(), nullptr);
+    for (size_t i = 0; i < objects.size(); ++i) {
+      if (object_match[i] >= 0) matched_by[i] = dets[object_match[i]];
+    }
+    for (size_t k = 0; k < unmatched.size(); ++k) {
+      if (late[k] >= 0) matched_by[unmatched_index[k]] = outside[late[k]];
+    }
     for (size_t i = 0; i < objects.size(); ++i) {
       const Eigen::Vector2d near = NearPoint(*objects[i]);
       const double range = near.norm();
-      if (object_match[i] < 0) result.errors.push_back({f, true, objects[i]->id, objects[i]->kind, near, range});
+      if (!matched_by[i]) result.errors.push_back({f, true, objects[i]->id, objects[i]->kind, near, range});
       for (BandScore* b : {&result.overall, band_of(range)}) {
         if (!b) continue;
         ++b->objects;
-        if (object_match[i] >= 0) {
+        if (matched_by[i]) {
           ++b->matched_objects;
-          const Detection& d = *dets[object_match[i]];
+          const Detection& d = *matched_by[i];
           const double error = std::abs(d.range_m - range);
           b->range_errors_m.push_back(error);
           b->relative_errors.push_back(error / std::max(range, 1e-6));

@@ -298,6 +298,21 @@ void TestEvaluation() {
   CHECK_EQ(r.overall.objects, 0);
   CHECK_EQ(r.overall.detections, 2);
   CHECK_EQ(r.overall.matched_detections, 1);
+  // A car whose near point is 19.5 m away (z 19.5..24) is counted; a detection inside its
+  // footprint at 20.3 m, outside the zone, still matches it (recall 1) but is not counted for
+  // precision. A detection in the zone on the same car is taken first, and then the one outside
+  // is left over, neither matched nor false.
+  const dps::TruthRow edge{0, 0.0, 5, "car", 0.0, 21.75, 0.0, 4.5, 1.8, 1.5, 0, 0};
+  r = dps::Evaluate({det(0.2, 20.3, "front")}, {edge}, dps::EvaluationOptions{});
+  CHECK_EQ(r.overall.objects, 1);
+  CHECK_EQ(r.overall.matched_objects, 1);
+  CHECK_EQ(r.overall.detections, 0);
+  CHECK(dps::ScoringErrorsCsv(r) == "frame,error,id,kind,x,z,range\n");
+  r = dps::Evaluate({det(0.2, 20.3, "front"), det(0.1, 18.9, "front")}, {edge}, dps::EvaluationOptions{});
+  CHECK_EQ(r.overall.matched_objects, 1);
+  CHECK_EQ(r.overall.detections, 1);
+  CHECK_EQ(r.overall.matched_detections, 1);
+  CHECK_NEAR(r.overall.range_errors_m.at(0), std::abs(std::hypot(0.1, 18.9) - 19.5), 1e-9);
   // Detections more than the tolerance away do not match; the error list names the missed car
   // (id 1, near point (0, 7.75)) and the false detection (front, (2, 7)).
   r = dps::Evaluate({det(2.0, 7.0, "front")}, {car}, dps::EvaluationOptions{});

@@ -19,6 +19,8 @@ the processed field of view; a detection matches an object when its (x, z) lies 
 max(0.75 m, 0.1 * range) of the footprint; nearest pairs first, each at most once, the counted
 objects first. A detection in the zone that matches an object not counted (near point outside the
 zone, part of it inside) is a true detection: it counts for precision, the object not for recall.
+A counted object left unmatched may be matched by a detection outside the zone (its near point at
+19.5 m, the detection at 20.3 m); such a detection is not counted for precision.
 Prints recall, precision and range errors per range band and per source.
 
 Field of view: with --rig, the sectors the default pipeline's views cover, each +-atan(width / 2f):

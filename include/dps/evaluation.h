@@ -8,7 +8,10 @@
 // (0 inside); pairs are taken nearest first, each object and each detection at most once: first
 // with the counted objects, then what is left with the objects that do not count (their near point
 // outside the zone, the rest of them partly inside it) — a detection of such an object is a true
-// one, though the object is not counted for recall.
+// one, though the object is not counted for recall. Counted objects still unmatched are then
+// matched with the detections outside the zone: §5 matches detections and objects regardless of
+// the zone (a car whose near point is 19.5 m away, detected at 20.3 m, is found); such detections
+// are not counted for precision.
 // recall = matched counted objects / counted objects; precision = matched detections / detections
 // in the zone; range error = |detection range - near-point range| of the counted matches, per band
 // of the near point's range.
