@@ -238,7 +238,7 @@ int SeeThrough(const cv::Mat& disparity, const cv::Mat& road, int x0, int x1, fl
 
 std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> cs, const cv::Mat& disparity,
                                                const cv::Mat& road, const HistogramOptions& o, cv::Mat* labels,
-                                               const std::function<bool(int, float, int, float)>& allow) {
+                                               const LinkVeto& allow) {
   CV_Assert(disparity.type() == CV_32F && road.type() == CV_32F && disparity.size() == road.size());
   o.Check();
   if (o.link_max_gap == 0 || cs.size() < 2) return cs;
@@ -265,7 +265,7 @@ std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> c
       const HistogramComponent& b = cs[best];
       const float db = EndDisparity(b, false);
       if (!std::isfinite(db) || db <= 0 || std::max(da, db) > o.link_max_depth_ratio * std::min(da, db)) break;
-      if (allow && !allow(a.x_end - 1, da, b.x_begin, db)) break;
+      if (allow && !allow(a, a.x_end - 1, da, b, b.x_begin, db)) break;
       if (SeeThrough(disparity, road, a.x_end, b.x_begin, da, db, o) > o.link_max_see_through) break;
       if (!OnOneSurface(a, b, da, db, o)) break;
       a.column_disparity.resize(b.x_begin - a.x_begin, kInvalidDisparity);

@@ -1,6 +1,9 @@
 #include "dps/front_detection.h"
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
 
 #include <opencv2/imgproc.hpp>
 
@@ -65,6 +68,30 @@ bool FrontDetector::ColumnToGround(double x, double disparity, Eigen::Vector2d* 
   return true;
 }
 
+double FrontDetector::TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const {
+  const HistogramOptions& ho = options_.histogram;
+  const ViewSpec& s = left_->spec();
+  const Eigen::Vector3d& t = left_->viewpoint_vehicle();
+  std::vector<double> tops;
+  for (int x = c.x_begin; x < c.x_end; ++x) {
+    for (int y = 0; y < r.disparity.rows; ++y) {
+      const float v = r.disparity.at<float>(y, x);
+      if (!std::isfinite(v) || v <= 0 || r.score.at<float>(y, x) <= 0) continue;
+      const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
+      if (bin < 0 || bin >= labels.rows || labels.at<int>(bin, x) != c.label) continue;
+      // The highest pixel of the column in the component: its point's height above the road.
+      const double depth = s.focal_px * baseline_m_ / v;
+      const Eigen::Vector3d view((x - s.cx) * depth / s.focal_px, (y - s.cy) * depth / s.focal_px, depth);
+      tops.push_back(-(t + s.vehicle_from_view * view).y());
+      break;
+    }
+  }
+  if (tops.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t k = tops.size() / 4;  // three quarters of the columns reach at least this high
+  std::nth_element(tops.begin(), tops.begin() + k, tops.end(), std::greater<double>());
+  return tops[k];
+}
+
 FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right_omni) {
   FrontResult r;
   left_->Render(GreyImage(left_omni), r.left_view);
@@ -90,14 +117,19 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
   r.score = ScoreImage(r.disparity, road_, options_.histogram, ramp_);
   cv::Mat moments, labels;
   r.histogram = ColumnHistogram(r.disparity, r.score, options_.histogram, &moments);
-  // Parts of one surface are linked when the gap between them on the ground is short.
-  const auto short_gap = [this](int x0, float d0, int x1, float d1) {
-    Eigen::Vector2d a, b;
-    return ColumnToGround(x0, d0, &a) && ColumnToGround(x1, d1, &b) && (a - b).norm() <= options_.link_max_gap_m;
+  // Parts of one surface are linked when the gap between them on the ground is short and their
+  // tops are level (a pole beyond the end of a car's side is twice as tall).
+  const auto link = [&](const HistogramComponent& a, int x0, float d0, const HistogramComponent& b, int x1, float d1) {
+    Eigen::Vector2d ga, gb;
+    if (!ColumnToGround(x0, d0, &ga) || !ColumnToGround(x1, d1, &gb) || (ga - gb).norm() > options_.link_max_gap_m) {
+      return false;
+    }
+    return !(options_.link_max_top_difference_m > 0 &&
+             std::abs(TopHeight(r, labels, a) - TopHeight(r, labels, b)) > options_.link_max_top_difference_m);
   };
   const std::vector<HistogramComponent> components =
       LinkComponents(FindComponents(r.histogram, options_.histogram, &labels, moments), r.disparity, road_,
-                     options_.histogram, &labels, short_gap);
+                     options_.histogram, &labels, link);
   r.obstacle = cv::Mat(r.histogram.size(), CV_32F, cv::Scalar(0));
   int id = 0;
   const HistogramOptions& ho = options_.histogram;

@@ -143,8 +143,9 @@ void TestLinking() {
     const int gone = parts[0].label == linked[0].label ? parts[1].label : parts[0].label;
     CHECK_EQ(cv::countNonZero(labels == gone), 0);  // relabelled
     // A veto from the caller keeps them apart.
-    CHECK_EQ(dps::LinkComponents(parts, disp, road, o, nullptr, [](int, float, int, float) { return false; }).size(),
-             size_t{2});
+    const dps::LinkVeto never = [](const dps::HistogramComponent&, int, float, const dps::HistogramComponent&, int,
+                                   float) { return false; };
+    CHECK_EQ(dps::LinkComponents(parts, disp, road, o, nullptr, never).size(), size_t{2});
   }
   // A pole (disparity 15, columns 36..41) beyond the end of a slanted surface (columns 46..100,
   // disparity 20 falling to 14.6), columns 42..45 between them without texture: near in depth
@@ -431,6 +432,51 @@ void TestFrontCoverage() {
   }
 }
 
+// A parked car on the right (x 2.5..4.3, z 3.35..7.85) and a 3 m pole 3.7 m beyond its far end
+// (x 2.9, z 11.6; the parked row's frame 12): in the left view the pole's disparity spreads
+// over the sky up to the car's side and the gap between them shows nothing farther, so the two
+// parts qualify for linking — but the pole's top is twice as high. Returns the number of
+// detections within the scoring tolerance of the pole's footprint.
+int PoleBeyondCarFound(double link_max_top_difference_m) {
+  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
+  scene.render.supersample = 1;
+  dps::SceneObject car, pole;
+  car.start.x_m = 3.4;
+  car.start.z_m = 5.6;
+  car.colour = 3;
+  pole.id = 2;
+  pole.kind = "pole";
+  pole.length_m = pole.width_m = 0.2;
+  pole.height_m = 3.0;
+  pole.start.x_m = 2.9;
+  pole.start.z_m = 11.6;
+  scene.objects = {car, pole};
+  const dps::SceneRenderer renderer(scene);
+  dps::FrontDetectorOptions options = dps::DefaultPipelineOptions(scene.rig).front;
+  options.temporal_max_variance_px2 = 0;
+  options.link_max_top_difference_m = link_max_top_difference_m;
+  dps::FrontDetector front(scene.rig, options);
+  const dps::FrameState st = renderer.StateAt(0.0);
+  const dps::FrontResult r = front.Detect(renderer.Render(st, 0, 0).image, renderer.Render(st, 1, 0).image);
+  const dps::TruthRow truth = dps::TruthAt(st, 0).at(1);
+  const double tolerance = std::max(0.75, 0.1 * dps::NearPoint(truth).norm());
+  int found = 0;
+  for (const dps::Detection& d : r.detections) {
+    std::printf("  front detection (%.2f, %.2f), z %.2f..%.2f\n", d.x_m, d.z_m, d.z_min_m, d.z_max_m);
+    found += dps::DistanceToFootprint(truth, {d.x_m, d.z_m}) <= tolerance;
+  }
+  return found;
+}
+
+void TestPoleBeyondCar() {
+  const int with_rule = PoleBeyondCarFound(dps::FrontDetectorOptions().link_max_top_difference_m);
+  const int without = PoleBeyondCarFound(0.0);
+  std::printf("pole beyond a parked car: %d detection(s) on the pole with the top-height rule, %d without\n",
+              with_rule, without);
+  CHECK_EQ(with_rule, 1);
+  CHECK_EQ(without, 0);
+}
+
 int main() {
   TestHistogram();
   TestLinking();
@@ -439,6 +485,7 @@ int main() {
   TestEvaluation();
   TestFrontCoverage();
   TestRenderedFront();
+  TestPoleBeyondCar();
   TestDriftCorrection();
   return dps_test::Report();
 }

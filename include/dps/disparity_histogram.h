@@ -100,12 +100,14 @@ std::vector<HistogramComponent> FindComponents(const cv::Mat& histogram, const H
 // untextured stretch of one surface shows nothing. `road` is the road's disparity as for
 // ScoreImage. Linked components become one (the left one's label; `labels`, when given, is
 // relabelled to match); options.link_max_gap = 0 returns the components unchanged.
-// `allow` (optional) gets the end column and disparity of the left part and the start column and
-// disparity of the right one and may veto the link (e.g. when the gap is too long on the ground).
-std::vector<HistogramComponent> LinkComponents(
-    std::vector<HistogramComponent> components, const cv::Mat& disparity, const cv::Mat& road,
-    const HistogramOptions& options, cv::Mat* labels = nullptr,
-    const std::function<bool(int x0, float d0, int x1, float d1)>& allow = nullptr);
+// `allow` (optional) gets the left part, its end column and disparity, and the right part, its
+// start column and disparity, and may veto the link (e.g. when the gap is too long on the
+// ground); when `labels` is given, the left part's pixels there already carry its label.
+using LinkVeto = std::function<bool(const HistogramComponent& a, int x0, float d0, const HistogramComponent& b,
+                                    int x1, float d1)>;
+std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> components, const cv::Mat& disparity,
+                                               const cv::Mat& road, const HistogramOptions& options,
+                                               cv::Mat* labels = nullptr, const LinkVeto& allow = nullptr);
 
 // The columns [first, last] of a component to project: from its first to its last column with a
 // centroid, less `trim` at each end when it is wider than 2 trim + 1. Block matching carries a

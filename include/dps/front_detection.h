@@ -38,6 +38,10 @@ struct FrontDetectorOptions {
   // (LinkComponents; link_max_gap = 0: never).
   int link_max_gap = 60;
   double link_max_gap_m = 6.0;
+  // ... and whose tops differ by at most this (the height above the road three quarters of a
+  // part's columns reach with their highest pixel), m; 0 = no such test. The measured tops of
+  // one car's parts spread by up to about 1 m (faces matched part way up); a pole is 3 m tall.
+  double link_max_top_difference_m = 1.2;
   double max_range_m = 60.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
   // Components whose pixels reach less than this above the road (median over columns) are flat
@@ -93,6 +97,9 @@ class FrontDetector {
   ViewSpec spec_;
   double vertical_offset_px_ = 0.0;
   int frames_ = 0;
+  // How high a component reaches above the road: of its columns' highest pixels (disparity in
+  // the component's bins), the height three quarters of the columns reach; NaN when none.
+  double TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const;
   std::unique_ptr<TemporalConsistencyFilter> temporal_;
   std::unique_ptr<SadStereoMatcher> matcher_;
   double baseline_m_ = 0.0;
