@@ -68,6 +68,15 @@ bool FrontDetector::ColumnToGround(double x, double disparity, Eigen::Vector2d* 
   return true;
 }
 
+bool FrontDetector::OuterPoint(const HistogramComponent& c, bool last, Eigen::Vector2d* ground) const {
+  const int n = static_cast<int>(c.column_disparity.size());
+  for (int i = 0; i < n; ++i) {
+    const int at = last ? n - 1 - i : i;
+    if (std::isfinite(c.column_disparity[at])) return ColumnToGround(c.x_begin + at, c.column_disparity[at], ground);
+  }
+  return false;
+}
+
 double FrontDetector::TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const {
   const HistogramOptions& ho = options_.histogram;
   const ViewSpec& s = left_->spec();
@@ -124,6 +133,13 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
     if (!ColumnToGround(x0, d0, &ga) || !ColumnToGround(x1, d1, &gb) || (ga - gb).norm() > options_.link_max_gap_m) {
       return false;
     }
+    // Parts apart on the ground are one object only if together they fit one vehicle's length.
+    Eigen::Vector2d first, last;
+    if (options_.link_vehicle_length_m > 0 && (ga - gb).norm() > options_.link_free_gap_m &&
+        OuterPoint(a, false, &first) && OuterPoint(b, true, &last) &&
+        (first - last).norm() > options_.link_vehicle_length_m) {
+      return false;
+    }
     return !(options_.link_max_top_difference_m > 0 &&
              std::abs(TopHeight(r, labels, a) - TopHeight(r, labels, b)) > options_.link_max_top_difference_m);
   };
@@ -154,7 +170,10 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
     }
     if (heights.empty()) continue;
     std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
-    if (heights[heights.size() / 2] < options_.min_obstacle_height_m) continue;
+    if (heights[heights.size() / 2] < options_.min_obstacle_height_m &&
+        !(c.x_end - c.x_begin >= options_.tall_min_columns && TopHeight(r, labels, c) >= options_.tall_min_top_m)) {
+      continue;
+    }
     // The outermost half window of columns is foreground fattening, not the object.
     const auto [first, last] = ProjectedColumns(c, options_.stereo.block_width / 2);
     std::vector<Eigen::Vector2d> points;

@@ -432,14 +432,72 @@ void TestFrontCoverage() {
   }
 }
 
+// Front detections of the parked row's frame `last` (straight at 8 m/s; `objects` placed at
+// t = 0; frames 0..last detected in turn, as dps-process does); prints them and returns them and
+// the frame's truth.
+std::vector<dps::Detection> FrontOfParkedRow(const std::vector<dps::SceneObject>& objects,
+                                             const dps::FrontDetectorOptions& options, int last,
+                                             std::vector<dps::TruthRow>* truth) {
+  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
+  scene.render.supersample = 1;
+  scene.objects = objects;
+  const dps::SceneRenderer renderer(scene);
+  dps::FrontDetector front(scene.rig, options);
+  dps::FrontResult r;
+  for (int f = 0; f <= last; ++f) {
+    const dps::FrameState state = renderer.StateAt(scene.FrameTime(f));
+    *truth = dps::TruthAt(state, f);
+    r = front.Detect(renderer.Render(state, 0, f).image, renderer.Render(state, 1, f).image);
+  }
+  for (const dps::Detection& d : r.detections) {
+    std::printf("  front detection (%.2f, %.2f), z %.2f..%.2f\n", d.x_m, d.z_m, d.z_min_m, d.z_max_m);
+  }
+  return r.detections;
+}
+
+// Detections within the scoring tolerance of a truth object's footprint.
+int Found(const std::vector<dps::Detection>& detections, const dps::TruthRow& truth) {
+  const double tolerance = std::max(0.75, 0.1 * dps::NearPoint(truth).norm());
+  int found = 0;
+  for (const dps::Detection& d : detections) found += dps::DistanceToFootprint(truth, {d.x_m, d.z_m}) <= tolerance;
+  return found;
+}
+
+// Two cars parked in a row on the right, 1.5 m apart (the parked row's first two; at frame 5
+// z 1.08..5.58 and 7.08..11.58): their sides lie on one plane and the gap between them shows
+// only the second car's untextured front, so the two sides qualify for linking — but together
+// they are 10.5 m long. Returns the detections on the second car.
+int SecondCarFound(double link_vehicle_length_m) {
+  dps::SceneObject first, second;
+  first.start.x_m = second.start.x_m = 3.4;
+  first.start.z_m = 6.0;
+  first.colour = 2;
+  second.id = 2;
+  second.start.z_m = 12.0;
+  second.colour = 3;
+  const dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
+  dps::FrontDetectorOptions options = dps::DefaultPipelineOptions(scene.rig).front;
+  options.link_vehicle_length_m = link_vehicle_length_m;
+  std::vector<dps::TruthRow> truth;
+  const std::vector<dps::Detection> detections = FrontOfParkedRow({first, second}, options, 5, &truth);
+  return Found(detections, truth.at(1));
+}
+
+void TestCarsInRow() {
+  const int with_rule = SecondCarFound(dps::FrontDetectorOptions().link_vehicle_length_m);
+  const int without = SecondCarFound(0.0);
+  std::printf("second of two parked cars: %d detection(s) on it with the vehicle-length rule, %d without\n",
+              with_rule, without);
+  CHECK_EQ(with_rule, 1);
+  CHECK_EQ(without, 0);
+}
+
 // A parked car on the right (x 2.5..4.3, z 3.35..7.85) and a 3 m pole 3.7 m beyond its far end
 // (x 2.9, z 11.6; the parked row's frame 12): in the left view the pole's disparity spreads
 // over the sky up to the car's side and the gap between them shows nothing farther, so the two
 // parts qualify for linking — but the pole's top is twice as high. Returns the number of
 // detections within the scoring tolerance of the pole's footprint.
 int PoleBeyondCarFound(double link_max_top_difference_m) {
-  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
-  scene.render.supersample = 1;
   dps::SceneObject car, pole;
   car.start.x_m = 3.4;
   car.start.z_m = 5.6;
@@ -450,22 +508,13 @@ int PoleBeyondCarFound(double link_max_top_difference_m) {
   pole.height_m = 3.0;
   pole.start.x_m = 2.9;
   pole.start.z_m = 11.6;
-  scene.objects = {car, pole};
-  const dps::SceneRenderer renderer(scene);
+  const dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
   dps::FrontDetectorOptions options = dps::DefaultPipelineOptions(scene.rig).front;
-  options.temporal_max_variance_px2 = 0;
+  options.temporal_max_variance_px2 = 0;  // one frame
   options.link_max_top_difference_m = link_max_top_difference_m;
-  dps::FrontDetector front(scene.rig, options);
-  const dps::FrameState st = renderer.StateAt(0.0);
-  const dps::FrontResult r = front.Detect(renderer.Render(st, 0, 0).image, renderer.Render(st, 1, 0).image);
-  const dps::TruthRow truth = dps::TruthAt(st, 0).at(1);
-  const double tolerance = std::max(0.75, 0.1 * dps::NearPoint(truth).norm());
-  int found = 0;
-  for (const dps::Detection& d : r.detections) {
-    std::printf("  front detection (%.2f, %.2f), z %.2f..%.2f\n", d.x_m, d.z_m, d.z_min_m, d.z_max_m);
-    found += dps::DistanceToFootprint(truth, {d.x_m, d.z_m}) <= tolerance;
-  }
-  return found;
+  std::vector<dps::TruthRow> truth;
+  const std::vector<dps::Detection> detections = FrontOfParkedRow({car, pole}, options, 0, &truth);
+  return Found(detections, truth.at(1));
 }
 
 void TestPoleBeyondCar() {
@@ -486,6 +535,7 @@ int main() {
   TestFrontCoverage();
   TestRenderedFront();
   TestPoleBeyondCar();
+  TestCarsInRow();
   TestDriftCorrection();
   return dps_test::Report();
 }

@@ -42,11 +42,21 @@ struct FrontDetectorOptions {
   // part's columns reach with their highest pixel), m; 0 = no such test. The measured tops of
   // one car's parts spread by up to about 1 m (faces matched part way up); a pole is 3 m tall.
   double link_max_top_difference_m = 1.2;
+  // ... and, when more than link_free_gap_m apart on the ground, only if together (first column
+  // to last) at most link_vehicle_length_m long: one vehicle's textureless stretch, not two
+  // parked cars in a row (0 = no such test).
+  double link_free_gap_m = 1.0;
+  double link_vehicle_length_m = 5.5;
   double max_range_m = 60.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
   // Components whose pixels reach less than this above the road (median over columns) are flat
   // (markings, mismatched road) and dropped; metres, >= 0.
   double min_obstacle_height_m = 0.5;
+  // ... unless at least tall_min_columns wide with a top (TopHeight) at least tall_min_top_m high:
+  // a car's long side seen at a grazing angle is matched in a few rows per column (its body's
+  // bands have no texture), yet its highest pixels reach its roof line.
+  int tall_min_columns = 60;
+  double tall_min_top_m = 0.8;
   // Drift correction: every `drift_interval` frames (0 = never) the rows of the two views are
   // compared (EstimateVerticalOffset); a shift of more than drift_min_px measured on at least
   // drift_min_features corners is compensated by rebuilding the right view.
@@ -100,6 +110,8 @@ class FrontDetector {
   // How high a component reaches above the road: of its columns' highest pixels (disparity in
   // the component's bins), the height three quarters of the columns reach; NaN when none.
   double TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const;
+  // The ground point of a component's first (or last) column with a centroid; false if none.
+  bool OuterPoint(const HistogramComponent& c, bool last, Eigen::Vector2d* ground) const;
   std::unique_ptr<TemporalConsistencyFilter> temporal_;
   std::unique_ptr<SadStereoMatcher> matcher_;
   double baseline_m_ = 0.0;
