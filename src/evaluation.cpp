@@ -134,7 +134,7 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
     for (const Detection* d : det_by_frame[f]) (in_zone({d->x_m, d->z_m}) ? dets : outside).push_back(d);
     if (!dets.empty()) ++result.frames_with_detections;
     std::vector<int> det_match(dets.size(), -1);
-    std::vector<int> object_match = MatchNearestFirst(objects, dets, &det_match);
+    const std::vector<int> object_match = MatchNearestFirst(objects, dets, &det_match);
     // A counted object no detection in the zone matched may still be matched by one just outside
     // it (a car whose near point is 19.5 m away, detected at 20.3 m): §5 matches detections and
     // objects without regard to the zone, which only decides what is counted.

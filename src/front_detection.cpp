@@ -126,8 +126,9 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
   r.score = ScoreImage(r.disparity, road_, options_.histogram, ramp_);
   cv::Mat moments, labels;
   r.histogram = ColumnHistogram(r.disparity, r.score, options_.histogram, &moments);
-  // Parts of one surface are linked when the gap between them on the ground is short and their
-  // tops are level (a pole beyond the end of a car's side is twice as tall).
+  // Parts of one surface are linked when the gap between them on the ground is short, a wider
+  // gap only within one vehicle's length, and when their tops are level (a pole beyond the end of
+  // a car's side is twice as tall).
   const auto link = [&](const HistogramComponent& a, int x0, float d0, const HistogramComponent& b, int x1, float d1) {
     Eigen::Vector2d ga, gb;
     if (!ColumnToGround(x0, d0, &ga) || !ColumnToGround(x1, d1, &gb) || (ga - gb).norm() > options_.link_max_gap_m) {

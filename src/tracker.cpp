@@ -23,9 +23,9 @@ void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_
   ScalarUpdate(H, d.motion_mps - (H * t->x)(0, 0), d.motion_sigma_mps * d.motion_sigma_mps, gate_chi2, t);
 }
 
-// One scalar measurement of H x: its innovation and variance; skipped outside the gate.
 double Tracker::StandingProbability(const Track& t) { return 1.0 / (1.0 + std::exp(-t.standing_log_odds)); }
 
+// One scalar measurement of H x: its innovation and variance; skipped outside the gate.
 void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
                            Track* t) {
   const double S = (H * t->P * H.transpose())(0, 0) + variance;

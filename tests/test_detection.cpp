@@ -1,6 +1,7 @@
 // Tests of obstacle detection and scoring: the column histogram of a known disparity image,
 // the front projection against hand-computed points, fusion of parts, the scoring rules of
-// DESIGN.md §5 on hand-made cases, and front detection on rendered drives with known truth.
+// DESIGN.md §5 on hand-made cases, and front detection on rendered drives with known truth
+// (a lead car, the empty road, a pole beyond a parked car, two cars parked in a row).
 #include <cmath>
 #include <map>
 #include <cstdio>

@@ -1,6 +1,7 @@
 // Tests of the tracker: the Hungarian assignment on known answers, and tracks of synthetic
 // detections with known motion while the ego vehicle drives and turns: a parked object has zero
-// ground velocity, a moving one its true velocity, one id each, gating keeps two objects apart.
+// ground velocity, a moving one its true velocity, one id each, gating keeps two objects apart;
+// the standing model holds a noisy standing object still and lets a moving one move.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
