@@ -77,18 +77,23 @@ bool FrontDetector::OuterPoint(const HistogramComponent& c, bool last, Eigen::Ve
   return false;
 }
 
+bool FrontDetector::InComponent(const FrontResult& r, const cv::Mat& labels, int label, int x, int y) const {
+  const float v = r.disparity.at<float>(y, x);
+  if (!std::isfinite(v) || r.score.at<float>(y, x) <= 0) return false;
+  const int bin = static_cast<int>(std::floor((v - options_.histogram.min_disparity) / options_.histogram.bin_px));
+  return bin >= 0 && bin < labels.rows && labels.at<int>(bin, x) == label;
+}
+
 double FrontDetector::TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const {
-  const HistogramOptions& ho = options_.histogram;
   const ViewSpec& s = left_->spec();
   const Eigen::Vector3d& t = left_->viewpoint_vehicle();
   std::vector<double> tops;
   for (int x = c.x_begin; x < c.x_end; ++x) {
     for (int y = 0; y < r.disparity.rows; ++y) {
+      if (!InComponent(r, labels, c.label, x, y)) continue;
+      // The highest pixel of the column in the component (its score > 0 puts its disparity
+      // above the road's, so > 0): its point's height above the road.
       const float v = r.disparity.at<float>(y, x);
-      if (!std::isfinite(v) || v <= 0 || r.score.at<float>(y, x) <= 0) continue;
-      const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
-      if (bin < 0 || bin >= labels.rows || labels.at<int>(bin, x) != c.label) continue;
-      // The highest pixel of the column in the component: its point's height above the road.
       const double depth = s.focal_px * baseline_m_ / v;
       const Eigen::Vector3d view((x - s.cx) * depth / s.focal_px, (y - s.cy) * depth / s.focal_px, depth);
       tops.push_back(-(t + s.vehicle_from_view * view).y());
@@ -149,7 +154,6 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
                      options_.histogram, &labels, link);
   r.obstacle = cv::Mat(r.histogram.size(), CV_32F, cv::Scalar(0));
   int id = 0;
-  const HistogramOptions& ho = options_.histogram;
   const auto [first_valid, last_valid] = ValidColumns(r.disparity);
   const int margin = options_.stereo.block_width;
   for (const HistogramComponent& c : components) {
@@ -161,12 +165,7 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
       const float d = c.column_disparity[x - c.x_begin];
       if (!std::isfinite(d) || d <= 0) continue;
       int rows = 0;
-      for (int y = 0; y < r.disparity.rows; ++y) {
-        const float v = r.disparity.at<float>(y, x);
-        if (!std::isfinite(v) || r.score.at<float>(y, x) <= 0) continue;
-        const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
-        rows += bin >= 0 && bin < labels.rows && labels.at<int>(bin, x) == c.label;
-      }
+      for (int y = 0; y < r.disparity.rows; ++y) rows += InComponent(r, labels, c.label, x, y);
       heights.push_back(rows * baseline_m_ / d);
     }
     if (heights.empty()) continue;

@@ -25,47 +25,33 @@ void Tracker::ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_
 
 double Tracker::StandingProbability(const Track& t) { return 1.0 / (1.0 + std::exp(-t.standing_log_odds)); }
 
-// One scalar measurement of H x: its innovation and variance; skipped outside the gate.
-void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
-                           Track* t) {
-  const double S = (H * t->P * H.transpose())(0, 0) + variance;
-  if (innovation * innovation > gate_chi2 * S) return;
+// A measurement of H x in M dimensions: its innovation and covariance; skipped outside the gate.
+template <int M>
+void Tracker::Update(const Eigen::Matrix<double, M, 5>& H, const Eigen::Matrix<double, M, 1>& innovation,
+                     const Eigen::Matrix<double, M, M>& covariance, double gate_chi2, Track* t) {
+  const Eigen::Matrix<double, M, M> S = H * t->P * H.transpose() + covariance;
+  const double d2 = innovation.dot(S.ldlt().solve(innovation));
+  if (d2 > gate_chi2) return;
   // The same measurement (value innovation + H x) under the standing model, whose state is the
   // position alone (velocity 0): the models' likelihood ratio, then its own update.
-  const Eigen::Matrix<double, 1, 2> Hs = H.leftCols<2>();
-  const double is = innovation + (H * t->x)(0, 0) - (Hs * t->standing)(0, 0);
-  const double Ss = (Hs * t->standing_P * Hs.transpose())(0, 0) + variance;
-  t->standing_log_odds += 0.5 * (innovation * innovation / S + std::log(S)) - 0.5 * (is * is / Ss + std::log(Ss));
+  const Eigen::Matrix<double, M, 2> Hs = H.template leftCols<2>();
+  const Eigen::Matrix<double, M, 1> is = innovation + H * t->x - Hs * t->standing;
+  const Eigen::Matrix<double, M, M> Ss = Hs * t->standing_P * Hs.transpose() + covariance;
+  t->standing_log_odds += 0.5 * (d2 + std::log(S.determinant())) -
+                          0.5 * (is.dot(Ss.ldlt().solve(is)) + std::log(Ss.determinant()));
   if (Hs.squaredNorm() > 0) {
-    const Eigen::Vector2d Ks = t->standing_P * Hs.transpose() / Ss;
+    const Eigen::Matrix<double, 2, M> Ks = t->standing_P * Hs.transpose() * Ss.inverse();
     t->standing += Ks * is;
     t->standing_P = (Eigen::Matrix2d::Identity() - Ks * Hs) * t->standing_P;
   }
-  const Eigen::Matrix<double, 5, 1> K = t->P * H.transpose() / S;
+  const Eigen::Matrix<double, 5, M> K = t->P * H.transpose() * S.inverse();
   t->x += K * innovation;
   t->P = (Cov::Identity() - K * H) * t->P;
 }
 
-// A measurement of H x in two dimensions: its innovation and covariance; skipped outside the gate.
-void Tracker::VectorUpdate(const Eigen::Matrix<double, 2, 5>& H, const Eigen::Vector2d& innovation,
-                           const Eigen::Matrix2d& covariance, double gate_chi2, Track* t) {
-  const Eigen::Matrix2d S = H * t->P * H.transpose() + covariance;
-  const double d2 = innovation.dot(S.ldlt().solve(innovation));
-  if (d2 > gate_chi2) return;
-  // The standing model, as in ScalarUpdate.
-  const Eigen::Matrix2d Hs = H.leftCols<2>();
-  const Eigen::Vector2d is = innovation + H * t->x - Hs * t->standing;
-  const Eigen::Matrix2d Ss = Hs * t->standing_P * Hs.transpose() + covariance;
-  t->standing_log_odds += 0.5 * (d2 + std::log(S.determinant())) -
-                          0.5 * (is.dot(Ss.ldlt().solve(is)) + std::log(Ss.determinant()));
-  if (Hs.squaredNorm() > 0) {
-    const Eigen::Matrix2d Ks = t->standing_P * Hs.transpose() * Ss.inverse();
-    t->standing += Ks * is;
-    t->standing_P = (Eigen::Matrix2d::Identity() - Ks * Hs) * t->standing_P;
-  }
-  const Eigen::Matrix<double, 5, 2> K = t->P * H.transpose() * S.inverse();
-  t->x += K * innovation;
-  t->P = (Cov::Identity() - K * H) * t->P;
+void Tracker::ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
+                           Track* t) {
+  Update<1>(H, Eigen::Matrix<double, 1, 1>(innovation), Eigen::Matrix<double, 1, 1>(variance), gate_chi2, t);
 }
 
 bool RegisterPoints(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
@@ -130,7 +116,7 @@ void Tracker::ApplyRegistration(double t_s, const std::vector<Eigen::Vector2d>& 
       } else {
         Eigen::Matrix<double, 2, 5> H = Eigen::Matrix<double, 2, 5>::Zero();
         H(0, 2) = H(1, 3) = 1;
-        VectorUpdate(H, innovation, R, options_.gate_chi2, t);
+        Update<2>(H, innovation, R, options_.gate_chi2, t);
       }
     }
     break;
@@ -389,7 +375,7 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
       // Update (H = [I 0]); gated already by the assignment.
       Eigen::Matrix<double, 2, 5> H = Eigen::Matrix<double, 2, 5>::Zero();
       H.leftCols<2>().setIdentity();
-      VectorUpdate(H, m.point - t.x.head<2>(), R[j], std::numeric_limits<double>::infinity(), &t);
+      Update<2>(H, m.point - t.x.head<2>(), R[j], std::numeric_limits<double>::infinity(), &t);
     }
     ApplyMotion(detections[j], Rwv, options_.motion_gate_chi2, &t);
     ApplyRegistration(t_s, points[j], !clipped_ends[j].empty(), Rwv, &t);

@@ -456,6 +456,27 @@ std::vector<dps::Detection> FrontOfParkedRow(const std::vector<dps::SceneObject>
   return r.detections;
 }
 
+// A standing object of the parked row's scene at (x, z) at t = 0: a car (4.5 x 1.8 x 1.5 m) or
+// a pole (0.2 x 0.2 x 3 m).
+dps::SceneObject Parked(int id, const char* kind, double x, double z, int colour) {
+  dps::SceneObject o;
+  o.id = id;
+  o.kind = kind;
+  if (o.kind == "pole") {
+    o.length_m = o.width_m = 0.2;
+    o.height_m = 3.0;
+  }
+  o.start.x_m = x;
+  o.start.z_m = z;
+  o.colour = colour;
+  return o;
+}
+
+// The front detector's default options for the parked row's rig.
+dps::FrontDetectorOptions ParkedRowFrontOptions() {
+  return dps::DefaultPipelineOptions(dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml").rig).front;
+}
+
 // Detections within the scoring tolerance of a truth object's footprint.
 int Found(const std::vector<dps::Detection>& detections, const dps::TruthRow& truth) {
   const double tolerance = std::max(0.75, 0.1 * dps::NearPoint(truth).norm());
@@ -469,18 +490,11 @@ int Found(const std::vector<dps::Detection>& detections, const dps::TruthRow& tr
 // only the second car's untextured front, so the two sides qualify for linking — but together
 // they are 10.5 m long. Returns the detections on the second car.
 int SecondCarFound(double link_vehicle_length_m) {
-  dps::SceneObject first, second;
-  first.start.x_m = second.start.x_m = 3.4;
-  first.start.z_m = 6.0;
-  first.colour = 2;
-  second.id = 2;
-  second.start.z_m = 12.0;
-  second.colour = 3;
-  const dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
-  dps::FrontDetectorOptions options = dps::DefaultPipelineOptions(scene.rig).front;
+  dps::FrontDetectorOptions options = ParkedRowFrontOptions();
   options.link_vehicle_length_m = link_vehicle_length_m;
   std::vector<dps::TruthRow> truth;
-  const std::vector<dps::Detection> detections = FrontOfParkedRow({first, second}, options, 5, &truth);
+  const std::vector<dps::Detection> detections =
+      FrontOfParkedRow({Parked(1, "car", 3.4, 6.0, 2), Parked(2, "car", 3.4, 12.0, 3)}, options, 5, &truth);
   return Found(detections, truth.at(1));
 }
 
@@ -499,22 +513,12 @@ void TestCarsInRow() {
 // parts qualify for linking — but the pole's top is twice as high. Returns the number of
 // detections within the scoring tolerance of the pole's footprint.
 int PoleBeyondCarFound(double link_max_top_difference_m) {
-  dps::SceneObject car, pole;
-  car.start.x_m = 3.4;
-  car.start.z_m = 5.6;
-  car.colour = 3;
-  pole.id = 2;
-  pole.kind = "pole";
-  pole.length_m = pole.width_m = 0.2;
-  pole.height_m = 3.0;
-  pole.start.x_m = 2.9;
-  pole.start.z_m = 11.6;
-  const dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
-  dps::FrontDetectorOptions options = dps::DefaultPipelineOptions(scene.rig).front;
+  dps::FrontDetectorOptions options = ParkedRowFrontOptions();
   options.temporal_max_variance_px2 = 0;  // one frame
   options.link_max_top_difference_m = link_max_top_difference_m;
   std::vector<dps::TruthRow> truth;
-  const std::vector<dps::Detection> detections = FrontOfParkedRow({car, pole}, options, 0, &truth);
+  const std::vector<dps::Detection> detections =
+      FrontOfParkedRow({Parked(1, "car", 3.4, 5.6, 3), Parked(2, "pole", 2.9, 11.6, 0)}, options, 0, &truth);
   return Found(detections, truth.at(1));
 }
 

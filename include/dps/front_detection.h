@@ -107,6 +107,8 @@ class FrontDetector {
   ViewSpec spec_;
   double vertical_offset_px_ = 0.0;
   int frames_ = 0;
+  // Whether pixel (x, y) votes for component `label`: a scored disparity in one of its bins.
+  bool InComponent(const FrontResult& r, const cv::Mat& labels, int label, int x, int y) const;
   // How high a component reaches above the road: of its columns' highest pixels (disparity in
   // the component's bins), the height three quarters of the columns reach; NaN when none.
   double TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const;

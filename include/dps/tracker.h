@@ -139,10 +139,12 @@ class Tracker {
   static void ApplyMotion(const Detection& d, const Eigen::Matrix2d& world_from_vehicle, double gate_chi2, Track* t);
   void ApplyRegistration(double t_s, const std::vector<Eigen::Vector2d>& points, bool cut,
                          const Eigen::Matrix2d& world_from_vehicle, Track* t) const;
+  // A measurement of H x (M dimensions) updating both models; ScalarUpdate is the M = 1 case.
+  template <int M>
+  static void Update(const Eigen::Matrix<double, M, 5>& H, const Eigen::Matrix<double, M, 1>& innovation,
+                     const Eigen::Matrix<double, M, M>& covariance, double gate_chi2, Track* t);
   static void ScalarUpdate(const Eigen::Matrix<double, 1, 5>& H, double innovation, double variance, double gate_chi2,
                            Track* t);
-  static void VectorUpdate(const Eigen::Matrix<double, 2, 5>& H, const Eigen::Vector2d& innovation,
-                           const Eigen::Matrix2d& covariance, double gate_chi2, Track* t);
   TrackerOptions options_;
   std::vector<Track> tracks_;
   int next_id_ = 1;
