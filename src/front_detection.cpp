@@ -23,80 +23,104 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   options_.histogram.two_sided = false;
   options_.histogram.link_max_gap = options.link_max_gap;
   options_.histogram.Check();
-  const ViewSpec spec = FrontViewSpec(rig, "left", "right", options.view_width, options.view_height, options.focal_px);
-  spec_ = spec;
-  if (options.temporal_max_variance_px2 > 0) {
-    temporal_ = std::make_unique<TemporalConsistencyFilter>(options.temporal_forgetting, options.temporal_max_variance_px2);
-  }
-  left_ = std::make_unique<VirtualView>(rig.Camera("left"), spec);
-  right_ = std::make_unique<VirtualView>(rig.Camera("right"), spec);
-  matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
-  baseline_m_ = (rig.Camera("right").vehicle_from_camera.t - rig.Camera("left").vehicle_from_camera.t).norm();
-  cv::Mat own = OwnCarMask(*left_, rig.vehicle, options.own_car_height_m);
-  cv::bitwise_or(own, OwnCarMask(*right_, rig.vehicle, options.own_car_height_m), own);
-  cv::bitwise_or(own, left_->mask() == 0, ignore_);
-  // The road's disparity at every pixel of the left view (the reference).
-  road_ = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(kInvalidDisparity));
-  const Eigen::Vector3d origin = left_->viewpoint_vehicle();
-  for (int y = 0; y < spec.height; ++y) {
-    for (int x = 0; x < spec.width; ++x) {
-      const Eigen::Vector3d ray = left_->RayVehicle(x, y);
-      if (ray.y() <= 1e-9 || origin.y() >= 0) continue;  // looks up: no road
-      const Eigen::Vector3d ground = origin + (-origin.y() / ray.y()) * ray;
-      const double depth = (spec.vehicle_from_view.transpose() * (ground - origin)).z();
-      if (depth > 0) road_.at<float>(y, x) = static_cast<float>(spec.focal_px * baseline_m_ / depth);
+  spec_ = FrontViewSpec(rig, "left", "right", options.view_width, options.view_height, options.focal_px);
+  left_ = std::make_unique<VirtualView>(rig.Camera("left"), spec_);
+  right_ = std::make_unique<VirtualView>(rig.Camera("right"), spec_);
+  const Eigen::Vector3d l = rig.Camera("left").vehicle_from_camera.t, r = rig.Camera("right").vehicle_from_camera.t;
+  baseline_m_ = (r - l).norm();
+  midpoint_ = Eigen::Vector2d((l.x() + r.x()) / 2, (l.z() + r.z()) / 2);
+  across_ = Eigen::Vector2d(r.x() - l.x(), r.z() - l.z()).normalized();
+  // Half the view and an eighth: what lies beyond the left camera is left of the right view's
+  // centre, and what reaches beyond it lies right of the left view's centre; the eighth keeps the
+  // parts of wide objects that stretch farther. The skipped columns are even in number, so that the matcher's
+  // half-resolution level keeps the grid of the whole view.
+  matched_columns_ = spec_.width - std::max(0, (spec_.width / 2 - spec_.width / 8) / 2 * 2);
+  by_left_.view = left_.get();
+  by_right_.view = right_.get();
+  by_right_.mirrored = true;
+  for (Reference* ref : {&by_left_, &by_right_}) {
+    Prepare(ref);
+    ref->matcher = std::make_unique<SadStereoMatcher>(options.stereo);
+    if (options.temporal_max_variance_px2 > 0) {
+      ref->temporal = std::make_unique<TemporalConsistencyFilter>(options.temporal_forgetting,
+                                                                   options.temporal_max_variance_px2);
     }
   }
-  ramp_ = RoadRamp(road_, options.stereo.block_height / 2 + 1);
 }
 
 FrontDetector::~FrontDetector() = default;
 
+void FrontDetector::Prepare(Reference* ref) const {
+  const VirtualView& view = *ref->view;
+  const ViewSpec& spec = view.spec();
+  cv::Mat own = OwnCarMask(*left_, rig_.vehicle, options_.own_car_height_m);
+  cv::bitwise_or(own, OwnCarMask(*right_, rig_.vehicle, options_.own_car_height_m), own);
+  cv::bitwise_or(own, view.mask() == 0, ref->ignore);
+  // The road's disparity at every pixel of the reference view.
+  ref->road = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(kInvalidDisparity));
+  const Eigen::Vector3d origin = view.viewpoint_vehicle();
+  for (int y = 0; y < spec.height; ++y) {
+    for (int x = 0; x < spec.width; ++x) {
+      const Eigen::Vector3d ray = view.RayVehicle(x, y);
+      if (ray.y() <= 1e-9 || origin.y() >= 0) continue;  // looks up: no road
+      const Eigen::Vector3d ground = origin + (-origin.y() / ray.y()) * ray;
+      const double depth = (spec.vehicle_from_view.transpose() * (ground - origin)).z();
+      if (depth > 0) ref->road.at<float>(y, x) = static_cast<float>(spec.focal_px * baseline_m_ / depth);
+    }
+  }
+  ref->ramp = RoadRamp(ref->road, options_.stereo.block_height / 2 + 1);
+}
 
 bool FrontDetector::ColumnToGround(double x, double disparity, Eigen::Vector2d* ground) const {
+  return ColumnToGround(*left_, x, disparity, ground);
+}
+
+bool FrontDetector::ColumnToGround(const VirtualView& view, double x, double disparity, Eigen::Vector2d* ground) const {
   if (!(disparity > 0)) return false;
-  const ViewSpec& s = left_->spec();
+  const ViewSpec& s = view.spec();
   const double depth = s.focal_px * baseline_m_ / disparity;
   const double lateral = (x - s.cx) * depth / s.focal_px;
   // The view-frame point (lateral, h, depth) whose vehicle-frame height is 0 (the ground): the
   // vertical line of the column at that depth, dropped onto the road (eq. 16).
   const Eigen::Matrix3d& R = s.vehicle_from_view;
-  const Eigen::Vector3d& t = left_->viewpoint_vehicle();
+  const Eigen::Vector3d& t = view.viewpoint_vehicle();
   const double h = std::abs(R(1, 1)) > 1e-9 ? -(t.y() + R(1, 0) * lateral + R(1, 2) * depth) / R(1, 1) : 0.0;
   const Eigen::Vector3d p = t + R * Eigen::Vector3d(lateral, h, depth);
   *ground = Eigen::Vector2d(p.x(), p.z());
   return true;
 }
 
-bool FrontDetector::OuterPoint(const HistogramComponent& c, bool last, Eigen::Vector2d* ground) const {
+bool FrontDetector::OuterPoint(const VirtualView& view, const HistogramComponent& c, bool last,
+                               Eigen::Vector2d* ground) const {
   const int n = static_cast<int>(c.column_disparity.size());
   for (int i = 0; i < n; ++i) {
     const int at = last ? n - 1 - i : i;
-    if (std::isfinite(c.column_disparity[at])) return ColumnToGround(c.x_begin + at, c.column_disparity[at], ground);
+    if (std::isfinite(c.column_disparity[at])) return ColumnToGround(view, c.x_begin + at, c.column_disparity[at], ground);
   }
   return false;
 }
 
-bool FrontDetector::InComponent(const FrontResult& r, const cv::Mat& labels, int label, int x, int y) const {
-  const float v = r.disparity.at<float>(y, x);
-  if (!std::isfinite(v) || r.score.at<float>(y, x) <= 0) return false;
+bool FrontDetector::InComponent(const FrontMatch& m, const cv::Mat& labels, int label, int x, int y) const {
+  const float v = m.disparity.at<float>(y, x);
+  if (!std::isfinite(v) || m.score.at<float>(y, x) <= 0) return false;
   const int bin = static_cast<int>(std::floor((v - options_.histogram.min_disparity) / options_.histogram.bin_px));
   return bin >= 0 && bin < labels.rows && labels.at<int>(bin, x) == label;
 }
 
-double FrontDetector::TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const {
-  const ViewSpec& s = left_->spec();
-  const Eigen::Vector3d& t = left_->viewpoint_vehicle();
+double FrontDetector::TopHeight(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels,
+                                const HistogramComponent& c) const {
+  const ViewSpec& s = view.spec();
+  const Eigen::Vector3d& t = view.viewpoint_vehicle();
   std::vector<double> tops;
   for (int x = c.x_begin; x < c.x_end; ++x) {
-    for (int y = 0; y < r.disparity.rows; ++y) {
-      if (!InComponent(r, labels, c.label, x, y)) continue;
+    for (int y = 0; y < m.disparity.rows; ++y) {
+      if (!InComponent(m, labels, c.label, x, y)) continue;
       // The highest pixel of the column in the component (its score > 0 puts its disparity
       // above the road's, so > 0): its point's height above the road.
-      const float v = r.disparity.at<float>(y, x);
+      const float v = m.disparity.at<float>(y, x);
       const double depth = s.focal_px * baseline_m_ / v;
-      const Eigen::Vector3d view((x - s.cx) * depth / s.focal_px, (y - s.cy) * depth / s.focal_px, depth);
-      tops.push_back(-(t + s.vehicle_from_view * view).y());
+      const Eigen::Vector3d p((x - s.cx) * depth / s.focal_px, (y - s.cy) * depth / s.focal_px, depth);
+      tops.push_back(-(t + s.vehicle_from_view * p).y());
       break;
     }
   }
@@ -108,6 +132,15 @@ double FrontDetector::TopHeight(const FrontResult& r, const cv::Mat& labels, con
 
 FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right_omni) {
   FrontResult r;
+  RenderViews(left_omni, right_omni, &r);
+  MatchReference(0, &r);
+  MatchReference(1, &r);
+  CombineReferences(&r);
+  return r;
+}
+
+void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_omni, FrontResult* out) {
+  FrontResult& r = *out;
   left_->Render(GreyImage(left_omni), r.left_view);
   right_->Render(GreyImage(right_omni), r.right_view);
   // Drift: measure the rows' misalignment now and then, and rebuild the right view to cancel it.
@@ -120,41 +153,89 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
       ViewSpec shifted = spec_;
       shifted.cy -= vertical_offset_px_;
       right_ = std::make_unique<VirtualView>(rig_.Camera("right"), shifted);
+      by_right_.view = right_.get();
+      Prepare(&by_left_);
+      Prepare(&by_right_);
       right_->Render(GreyImage(right_omni), r.right_view);
     }
   }
   r.vertical_offset_px = vertical_offset_px_;
   ++frames_;
-  r.disparity = matcher_->Compute(r.left_view, r.right_view);
-  r.disparity.setTo(kInvalidDisparity, ignore_);
-  if (temporal_) r.disparity = temporal_->Apply(r.disparity);
-  r.score = ScoreImage(r.disparity, road_, options_.histogram, ramp_);
+}
+
+void FrontDetector::MatchReference(int reference, FrontResult* r) {
+  Reference& ref = reference == 0 ? by_left_ : by_right_;
+  ref.found = DetectWith(ref, r->left_view, r->right_view, reference == 0 ? &r->by_left : &r->by_right);
+}
+
+void FrontDetector::CombineReferences(FrontResult* r) const {
+  r->detections = by_left_.found;
+  // A component wholly beyond the left camera may be a part of an object reaching past it that the
+  // left view saw whole (its back fell apart in the right view): it joins that object.
+  for (const Detection& d : by_right_.found) {
+    bool joined = false;
+    for (Detection& e : r->detections) {
+      const std::vector<Detection> fused = FuseDetections({e, d}, options_.straddle_merge_m);
+      if (fused.size() == 1) {
+        e = fused.front();
+        joined = true;
+        break;
+      }
+    }
+    if (!joined) r->detections.push_back(d);
+  }
+  for (size_t i = 0; i < r->detections.size(); ++i) r->detections[i].id = static_cast<int>(i);
+}
+
+std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view,
+                                                 FrontMatch* m) {
+  const VirtualView& view = *ref.view;
+  // The reference's columns that show its side, matched against the whole other view: the left
+  // view's last matched_columns_, the right view's first (mirrored: its last, too).
+  const int w = spec_.width, first = w - matched_columns_;
+  cv::Mat reference, other;
+  if (ref.mirrored) {
+    cv::flip(right_view, reference, 1);  // into new images: the views are shared with the other task
+    cv::flip(left_view, other, 1);
+  } else {
+    reference = left_view;
+    other = right_view;
+  }
+  cv::Mat disparity(reference.size(), CV_32F, cv::Scalar(kInvalidDisparity));
+  ref.matcher->Compute(reference.colRange(first, w), other, first).copyTo(disparity.colRange(first, w));
+  if (ref.mirrored) cv::flip(disparity, disparity, 1);
+  m->disparity = disparity;
+  m->disparity.setTo(kInvalidDisparity, ref.ignore);
+  if (ref.temporal) m->disparity = ref.temporal->Apply(m->disparity);
+  m->score = ScoreImage(m->disparity, ref.road, options_.histogram, ref.ramp);
   cv::Mat moments, labels;
-  r.histogram = ColumnHistogram(r.disparity, r.score, options_.histogram, &moments);
+  m->histogram = ColumnHistogram(m->disparity, m->score, options_.histogram, &moments);
   // Parts of one surface are linked when the gap between them on the ground is short, a wider
   // gap only within one vehicle's length, and when their tops are level (a pole beyond the end of
   // a car's side is twice as tall).
   const auto link = [&](const HistogramComponent& a, int x0, float d0, const HistogramComponent& b, int x1, float d1) {
     Eigen::Vector2d ga, gb;
-    if (!ColumnToGround(x0, d0, &ga) || !ColumnToGround(x1, d1, &gb) || (ga - gb).norm() > options_.link_max_gap_m) {
+    if (!ColumnToGround(view, x0, d0, &ga) || !ColumnToGround(view, x1, d1, &gb) ||
+        (ga - gb).norm() > options_.link_max_gap_m) {
       return false;
     }
     // Parts apart on the ground are one object only if together they fit one vehicle's length.
-    Eigen::Vector2d first, last;
+    Eigen::Vector2d first_point, last_point;
     if (options_.link_vehicle_length_m > 0 && (ga - gb).norm() > options_.link_free_gap_m &&
-        OuterPoint(a, false, &first) && OuterPoint(b, true, &last) &&
-        (first - last).norm() > options_.link_vehicle_length_m) {
+        OuterPoint(view, a, false, &first_point) && OuterPoint(view, b, true, &last_point) &&
+        (first_point - last_point).norm() > options_.link_vehicle_length_m) {
       return false;
     }
     return !(options_.link_max_top_difference_m > 0 &&
-             std::abs(TopHeight(r, labels, a) - TopHeight(r, labels, b)) > options_.link_max_top_difference_m);
+             std::abs(TopHeight(view, *m, labels, a) - TopHeight(view, *m, labels, b)) >
+                 options_.link_max_top_difference_m);
   };
   const std::vector<HistogramComponent> components =
-      LinkComponents(FindComponents(r.histogram, options_.histogram, &labels, moments), r.disparity, road_,
+      LinkComponents(FindComponents(m->histogram, options_.histogram, &labels, moments), m->disparity, ref.road,
                      options_.histogram, &labels, link);
-  r.obstacle = cv::Mat(r.histogram.size(), CV_32F, cv::Scalar(0));
-  int id = 0;
-  const auto [first_valid, last_valid] = ValidColumns(r.disparity);
+  m->obstacle = cv::Mat(m->histogram.size(), CV_32F, cv::Scalar(0));
+  std::vector<Detection> detections;
+  const auto [first_valid, last_valid] = ValidColumns(m->disparity);
   const int margin = options_.stereo.block_width;
   for (const HistogramComponent& c : components) {
     // An obstacle stands up from the road: in each column it fills many rows with its disparity
@@ -165,34 +246,42 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
       const float d = c.column_disparity[x - c.x_begin];
       if (!std::isfinite(d) || d <= 0) continue;
       int rows = 0;
-      for (int y = 0; y < r.disparity.rows; ++y) rows += InComponent(r, labels, c.label, x, y);
+      for (int y = 0; y < m->disparity.rows; ++y) rows += InComponent(*m, labels, c.label, x, y);
       heights.push_back(rows * baseline_m_ / d);
     }
     if (heights.empty()) continue;
     std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
     if (heights[heights.size() / 2] < options_.min_obstacle_height_m &&
-        !(c.x_end - c.x_begin >= options_.tall_min_columns && TopHeight(r, labels, c) >= options_.tall_min_top_m)) {
+        !(c.x_end - c.x_begin >= options_.tall_min_columns &&
+          TopHeight(view, *m, labels, c) >= options_.tall_min_top_m)) {
       continue;
     }
     // The outermost half window of columns is foreground fattening, not the object.
-    const auto [first, last] = ProjectedColumns(c, options_.stereo.block_width / 2);
+    const auto [from, to] = ProjectedColumns(c, options_.stereo.block_width / 2);
     std::vector<Eigen::Vector2d> points;
-    for (int x = first; x <= last; ++x) {
+    std::vector<std::pair<int, float>> columns;
+    double reach = -std::numeric_limits<double>::infinity();  // farthest point towards the right camera
+    for (int x = from; x <= to; ++x) {
       const float d = c.column_disparity[x - c.x_begin];
       Eigen::Vector2d g;
-      if (!std::isfinite(d) || !ColumnToGround(x, d, &g) || g.norm() > options_.max_range_m) continue;
+      if (!std::isfinite(d) || !ColumnToGround(view, x, d, &g) || g.norm() > options_.max_range_m) continue;
       points.push_back(g);
-      const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);
-      if (row >= 0 && row < r.obstacle.rows) r.obstacle.at<float>(row, x) = d;
+      columns.emplace_back(x, d);
+      reach = std::max(reach, (g - midpoint_).dot(across_));
     }
-    if (points.empty()) continue;
+    // The right view keeps what lies wholly beyond the left camera, the left view the rest.
+    if (points.empty() || (reach >= -baseline_m_ / 2) == ref.mirrored) continue;
+    for (const auto& [x, d] : columns) {
+      const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);
+      if (row >= 0 && row < m->obstacle.rows) m->obstacle.at<float>(row, x) = d;
+    }
     Detection det = DetectionFromPoints(points, "front");
     if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
     if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
-    det.id = id++;
-    r.detections.push_back(std::move(det));
+    det.id = static_cast<int>(detections.size());
+    detections.push_back(std::move(det));
   }
-  return r;
+  return detections;
 }
 
 }  // namespace dps

@@ -28,6 +28,16 @@ cv::Mat ToGrey(const cv::Mat& image, const char* which) {
   return grey;
 }
 
+// The left columns (inclusive) where the window of every disparity lies inside both images.
+struct ColumnRange {
+  int lo = 0, hi = -1;
+};
+ColumnRange MatchableColumns(int left_width, int right_width, int right_offset, int d_min, int n, int block_width) {
+  const int rw = block_width / 2, d_max = d_min + n - 1;
+  return {rw + std::max(0, d_max - right_offset),
+          std::min(left_width - 1 - rw, right_width - 1 - rw - right_offset + d_min)};
+}
+
 }  // namespace
 
 // Buffers of one stripe of rows, kept between calls (allocating them anew each time costs as much
@@ -38,13 +48,13 @@ struct StripeBuffers {
   std::vector<int> disp2, best_d;
   std::vector<float> row_disp;
 
-  internal::SadKernelBuffers Prepare(int width, int n_padded, int pad) {
+  internal::SadKernelBuffers Prepare(int width, int right_width, int n_padded, int pad) {
     hsad.resize(static_cast<size_t>(width) * n_padded);
     sad.resize(n_padded);
-    cost2.resize(width);
-    padded.resize(static_cast<size_t>(width) + 2 * pad);
+    cost2.resize(right_width);
+    padded.resize(static_cast<size_t>(right_width) + 2 * pad);
     padded_out.resize(padded.size());
-    disp2.resize(width);
+    disp2.resize(right_width);
     best_d.resize(width);
     row_disp.resize(width);
     return {hsad.data(), sad.data(), cost2.data(), padded.data(), padded_out.data(),
@@ -135,8 +145,8 @@ SadStereoMatcher::SadStereoMatcher(const StereoOptions& options)
 
 SadStereoMatcher::~SadStereoMatcher() = default;
 
-const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat& right, int d_min,
-                                              int n, int level) {
+const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat& right, int right_offset,
+                                              int d_min, int n, int level) {
   const StereoOptions& o = options_;
   LevelBuffers& buf = ws_->levels[level];
   // Both images at once (OpenCV runs the filters inside serially then).
@@ -167,6 +177,8 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
   in.left_step = buf.left.step;
   in.right = buf.right.ptr<std::uint8_t>();
   in.right_step = buf.right.step;
+  in.right_width = right.cols;
+  in.right_offset = right_offset;
   in.textured = buf.textured.ptr<std::uint8_t>();
   in.textured_step = buf.textured.step;
   in.out = out.ptr<float>();
@@ -177,9 +189,10 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
   in.n_padded = (n + kernel.lanes - 1) / kernel.lanes * kernel.lanes;
   in.rw = o.block_width / 2;
   in.rh = o.block_height / 2;
+  const ColumnRange columns = MatchableColumns(w, right.cols, right_offset, d_min, n, o.block_width);
+  in.x_lo = columns.lo;
+  in.x_hi = columns.hi;
   const int d_max = d_min + n - 1;
-  in.x_lo = in.rw + std::max(0, d_max);
-  in.x_hi = w - 1 - in.rw - std::max(0, -d_min);
   in.pad = std::max(std::abs(d_min), std::abs(d_max)) + in.n_padded + in.rw + 2;
   in.uniqueness_percent = static_cast<int>(std::lround(o.uniqueness_ratio));
   in.subpixel = o.subpixel;
@@ -193,38 +206,48 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
   cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
     for (int s = r.start; s < r.end; ++s) {
       const int a = y_lo + (y_hi - y_lo) * s / stripes, b = y_lo + (y_hi - y_lo) * (s + 1) / stripes;
-      if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, in.n_padded, in.pad));
+      if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, right.cols, in.n_padded, in.pad));
     }
   });
   return out;
 }
 
-cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_in) {
+cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_in, int right_offset) {
   const cv::Mat left = ToGrey(left_in, "left"), right = ToGrey(right_in, "right");
-  if (left.size() != right.size()) {
-    throw Error(Str("stereo: the images differ in size: ", left.cols, "x", left.rows, " and ",
-                    right.cols, "x", right.rows));
+  if (left.rows != right.rows || right.cols < left.cols) {
+    throw Error(Str("stereo: the right image (", right.cols, "x", right.rows, ") must have the left's rows and at least its columns (",
+                    left.cols, "x", left.rows, ")"));
+  }
+  if (right_offset < 0 || right_offset > right.cols - left.cols) {
+    throw Error(Str("stereo: right_offset = ", right_offset, ": violated constraint 0..", right.cols - left.cols,
+                    " (the right image's extra columns)"));
   }
   const StereoOptions& o = options_;
-  const int span = o.block_width + std::max(0, o.min_disparity + o.num_disparities - 1) +
-                   std::max(0, -o.min_disparity);
-  if (left.cols <= span || left.rows <= o.block_height) {
+  const ColumnRange fine_columns =
+      MatchableColumns(left.cols, right.cols, right_offset, o.min_disparity, o.num_disparities, o.block_width);
+  if (fine_columns.hi <= fine_columns.lo || left.rows <= o.block_height) {
     throw Error(Str("stereo: a ", left.cols, "x", left.rows, " image is too small for ",
                     o.num_disparities, " disparities from ", o.min_disparity, " with a ",
                     o.block_width, "x", o.block_height, " block"));
   }
-  cv::Mat fine = ComputeLevel(left, right, o.min_disparity, o.num_disparities, 0).clone();
-  if (!o.two_levels || left.cols / 2 <= span / 2 + o.block_width || left.rows / 2 <= o.block_height) {
+  cv::Mat fine = ComputeLevel(left, right, right_offset, o.min_disparity, o.num_disparities, 0).clone();
+  // Coarse level: half resolution, half the disparities, the same window (twice the area). An
+  // odd offset loses the right image's first column, so that the halves stay aligned.
+  const int d_min_half = static_cast<int>(std::floor(o.min_disparity / 2.0));
+  const int d_max_half = static_cast<int>(std::ceil((o.min_disparity + o.num_disparities - 1) / 2.0));
+  const cv::Mat right_even = right.colRange(right_offset % 2, right.cols);
+  const int offset_half = right_offset / 2;
+  const ColumnRange coarse_columns = MatchableColumns(left.cols / 2, right_even.cols / 2, offset_half, d_min_half,
+                                                      d_max_half - d_min_half + 1, o.block_width);
+  if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width || left.rows / 2 <= o.block_height) {
     return fine;
   }
-  // Coarse level: half resolution, half the disparities, the same window (twice the area).
   cv::Mat& left_half = ws_->left_half;
   cv::Mat& right_half = ws_->right_half;
   cv::pyrDown(left, left_half);
-  cv::pyrDown(right, right_half);
-  const int d_min_half = static_cast<int>(std::floor(o.min_disparity / 2.0));
-  const int d_max_half = static_cast<int>(std::ceil((o.min_disparity + o.num_disparities - 1) / 2.0));
-  const cv::Mat& coarse = ComputeLevel(left_half, right_half, d_min_half, d_max_half - d_min_half + 1, 1);
+  cv::pyrDown(right_even, right_half);
+  const cv::Mat& coarse =
+      ComputeLevel(left_half, right_half, offset_half, d_min_half, d_max_half - d_min_half + 1, 1);
   const float d_lo = static_cast<float>(o.min_disparity);
   const float d_hi = static_cast<float>(o.min_disparity + o.num_disparities - 1);
   cv::parallel_for_(cv::Range(0, fine.rows), [&](const cv::Range& rows) {

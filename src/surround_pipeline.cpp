@@ -96,15 +96,20 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
       grey[i] = image.channels() == 1 ? image.clone() : GreyImage(image);
     }
   }, 2);
+  // The front views first (both references match them).
+  const auto front_start = now();
+  front_->RenderViews(grey[0], grey[1], &out.front);
+  const double front_views_ms = ms(front_start, now());
   // The sources share nothing but the input, so they run as concurrent tasks with the caller's
   // `alongside` work: each of cv::getNumThreads() workers takes the next task until none is left,
-  // in the order front, alongside..., left, right (the front pair is the largest). Each stage's own
-  // cv::parallel_for_ then runs serially inside its task (OpenCV does not nest parallel regions):
-  // on 2 cores this costs less than splitting every stage into stripes, whose synchronisation
-  // dominates at the paper's 320x240 (docs/performance.md).
+  // in the order front (its two references), alongside..., left, right (the front pair is the
+  // largest). Each stage's own cv::parallel_for_ then runs serially inside its task (OpenCV does
+  // not nest parallel regions): on 2 cores this costs less than splitting every stage into
+  // stripes, whose synchronisation dominates at the paper's 320x240 (docs/performance.md).
   const int n_alongside = static_cast<int>(alongside.size());
-  const int kFront = 0, kLeft = 1, kRight = 2, kAlongside = 3;  // task ids; alongside k is kAlongside + k
-  std::vector<int> tasks{kFront};
+  // Task ids; alongside k is kAlongside + k.
+  const int kFront = 0, kFrontRight = 1, kLeft = 2, kRight = 3, kAlongside = 4;
+  std::vector<int> tasks{kFront, kFrontRight};
   for (int k = 0; k < n_alongside; ++k) tasks.push_back(kAlongside + k);
   if (sides) tasks.insert(tasks.end(), {kLeft, kRight});
   const double dt = in.t_s - previous_t_s_;
@@ -118,7 +123,8 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
         const int task = tasks[i];
         const auto start = now();
         try {
-          if (task == kFront) out.front = front_->Detect(grey[0], grey[1]);
+          if (task == kFront) front_->MatchReference(0, &out.front);
+          if (task == kFrontRight) front_->MatchReference(1, &out.front);
           if (task == kLeft) out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt);
           if (task == kRight) out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt);
           if (task >= kAlongside) alongside[task - kAlongside]();
@@ -132,7 +138,8 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
   for (const std::exception_ptr& f : failure) {
     if (f) std::rethrow_exception(f);
   }
-  out.front_ms = task_ms[kFront];
+  front_->CombineReferences(&out.front);
+  out.front_ms = front_views_ms + task_ms[kFront] + task_ms[kFrontRight];
   out.sides_ms = task_ms[kLeft] + task_ms[kRight];
   out.detect_ms = ms(t0, now());
   out.detections = out.front.detections;

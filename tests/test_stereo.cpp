@@ -74,6 +74,41 @@ void TestShifts() {
   }
 }
 
+// A right image wider than the left (a view rendered beyond the left view's edges): with the
+// search range of columns before the left's first, the first columns match too, with the same
+// disparities as the interior; an odd offset (the coarse level drops a column) as well.
+void TestWiderRight() {
+  const cv::Mat big = Texture(420, 200, 5);
+  const double shift = 7.25;
+  cv::Mat right;
+  cv::warpAffine(big, right, cv::Matx23d(1, 0, shift, 0, 1, 0), big.size(), cv::INTER_CUBIC | cv::WARP_INVERSE_MAP,
+                 cv::BORDER_REFLECT);
+  dps::StereoOptions o;
+  o.num_disparities = 16;
+  dps::SadStereoMatcher matcher(o);
+  const int edge = o.block_width / 2 + o.num_disparities - 1;  // columns a same-size right image cannot match
+  for (const int offset : {40, 41}) {
+    const cv::Mat left = big.colRange(offset, offset + 340);
+    const cv::Mat wide = matcher.Compute(left, right, offset);
+    const cv::Mat same = matcher.Compute(left, right.colRange(offset, offset + 340));
+    CHECK_EQ(wide.size(), left.size());
+    double err_edge = 0, density_edge = 0, err_same = 0, density_same = 0;
+    ShiftStats(wide, shift, o.block_width / 2, edge, &err_edge, &density_edge);
+    ShiftStats(same, shift, o.block_width / 2, edge, &err_same, &density_same);
+    std::printf("wider right image, offset %d: first %d columns matched %.3f (median error %.3f px), "
+                "%.3f with a right image of the same size\n", offset, edge, density_edge, err_edge, density_same);
+    CHECK(density_edge >= kMinShiftDensity);
+    CHECK(err_edge <= kShiftTolPx);
+    CHECK(density_same < 0.5);  // only the coarse level's fill, where its own search fits
+    double err = 0, density = 0;
+    ShiftStats(wide, shift, 40, left.cols - 40, &err, &density);
+    CHECK(err <= kShiftTolPx);
+    CHECK(density >= kMinShiftDensity);
+  }
+  CHECK_THROWS_WITH(matcher.Compute(big.colRange(0, 340), right.colRange(0, 330)), dps::Error, "at least its columns");
+  CHECK_THROWS_WITH(matcher.Compute(big.colRange(0, 340), right, 81), dps::Error, "right_offset = 81");
+}
+
 // The kernel is built for the baseline instruction set and (on x86-64) for AVX2; both must give
 // the same disparities to the bit.
 void TestKernelsAgree() {
@@ -135,7 +170,7 @@ void TestBadOptions() {
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.log_sigma_px = 0; })), dps::Error, "log_sigma_px");
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.prefilter_cap = 64; })), dps::Error, "prefilter_cap");
   dps::SadStereoMatcher m(dps::StereoOptions{});
-  CHECK_THROWS_WITH(m.Compute(cv::Mat(50, 60, CV_8U), cv::Mat(50, 61, CV_8U)), dps::Error, "differ in size");
+  CHECK_THROWS_WITH(m.Compute(cv::Mat(50, 60, CV_8U), cv::Mat(51, 60, CV_8U)), dps::Error, "the left's rows");
   CHECK_THROWS_WITH(m.Compute(cv::Mat(50, 60, CV_8U), cv::Mat(50, 60, CV_8U)), dps::Error, "too small");
   CHECK_THROWS_WITH(m.Compute(cv::Mat(), cv::Mat()), dps::Error, "empty");
   CHECK_THROWS_WITH(dps::TemporalConsistencyFilter(0.0, 1.0), dps::Error, "forgetting");
@@ -285,6 +320,7 @@ void TestKittiRoad() {
 
 int main() {
   TestShifts();
+  TestWiderRight();
   TestKernelsAgree();
   TestInterestOperator();
   TestBadOptions();

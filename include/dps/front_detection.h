@@ -47,6 +47,9 @@ struct FrontDetectorOptions {
   // parked cars in a row (0 = no such test).
   double link_free_gap_m = 1.0;
   double link_vehicle_length_m = 5.5;
+  // A right-view detection whose points come this close to a left-view one is part of the same
+  // object (see FrontDetector), m.
+  double straddle_merge_m = 0.5;
   double max_range_m = 60.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
   // Components whose pixels reach less than this above the road (median over columns) are flat
@@ -69,18 +72,34 @@ struct FrontDetectorOptions {
   double temporal_forgetting = 0.5;
 };
 
-// Everything one frame's front detection produced, for the map and the diagnostics.
-struct FrontResult {
-  cv::Mat left_view, right_view;  // rectified grey views
-  cv::Mat disparity;              // CV_32F
+// The matching with one view as the reference, in that view's columns.
+struct FrontMatch {
+  cv::Mat disparity;              // CV_32F, kInvalidDisparity where not matched
   cv::Mat score;                  // eq. 14
   cv::Mat histogram;              // eq. 15
   cv::Mat obstacle;               // CV_32F histogram-sized image of centroid disparities, 0 = none
+};
+
+// Everything one frame's front detection produced, for the map and the diagnostics.
+struct FrontResult {
+  cv::Mat left_view, right_view;  // rectified grey views
+  // The left view as reference (most objects) and the right view as reference (objects wholly
+  // beyond the left camera); see FrontDetector.
+  FrontMatch by_left, by_right;
   std::vector<Detection> detections;  // one per component (frame and t left 0)
   double vertical_offset_px = 0.0;    // the right view's compensated row shift so far
   bool drift_measured = false;        // the offset was measured on this frame
 };
 
+// Objects beside the road are matched with the farther camera's view as the reference: it sees
+// them less obliquely, so that a nearer object hides less of the ones behind it (a row of parked
+// cars on the left, with the left view as reference, lost the second car behind the first for ten
+// frames). The right view (matched mirrored) is the reference for components lying wholly beyond
+// the left camera (on the far side of the line through it, parallel to the view axis), the left
+// view for all others: between the cameras both see alike, and the left view as before. Each
+// reference is matched over the columns that can show its objects, up to an eighth of the view
+// past its centre, so the two cost little more than one full matching; their first d_max columns,
+// which the other view cannot match, show only the other reference's objects.
 class FrontDetector {
  public:
   // Builds both views and the road disparity image for the rig's "left" and "right" cameras.
@@ -91,34 +110,60 @@ class FrontDetector {
   // come in order: drift correction and the temporal filter keep state between them.
   FrontResult Detect(const cv::Mat& left_omni, const cv::Mat& right_omni);
 
-  // The ground point (vehicle frame x, z) of view column x at disparity d (eq. 16); false when d
-  // is not positive.
+  // Detect in three steps, so that the two references can run as concurrent tasks (Detect takes
+  // them in turn): the views (and drift correction); the matching and components with one
+  // reference (0: the left view, 1: the right view; the two may run at once); the detections of
+  // both. Steps of one frame in this order, frames in order.
+  void RenderViews(const cv::Mat& left_omni, const cv::Mat& right_omni, FrontResult* r);
+  void MatchReference(int reference, FrontResult* r);
+  void CombineReferences(FrontResult* r) const;
+
+  // The ground point (vehicle frame x, z) of left view column x at disparity d (eq. 16); false
+  // when d is not positive.
   bool ColumnToGround(double x, double disparity, Eigen::Vector2d* ground) const;
 
-  const cv::Mat& road_disparity() const { return road_; }  // CV_32F, inf above the horizon
+  const cv::Mat& road_disparity() const { return by_left_.road; }  // left view; CV_32F, inf above the horizon
   const VirtualView& left_view() const { return *left_; }
   const VirtualView& right_view() const { return *right_; }
   double baseline_m() const { return baseline_m_; }
 
  private:
+  // One view as the reference of the pair.
+  struct Reference {
+    const VirtualView* view = nullptr;   // the reference view (left_ or right_)
+    bool mirrored = false;               // the right view: matched with both views mirrored
+    cv::Mat road, ramp;                  // the road's disparity at its pixels; ScoreImage's ramp
+    cv::Mat ignore;                      // CV_8U, 255 where it sees nothing or the own car
+    std::unique_ptr<TemporalConsistencyFilter> temporal;
+    std::unique_ptr<SadStereoMatcher> matcher;  // one per reference: the two run concurrently
+    std::vector<Detection> found;               // this frame's components on its side
+  };
+  // Road, ramp and ignore mask of a reference (after the views are built or rebuilt).
+  void Prepare(Reference* ref) const;
+  // Matches the pair with `ref` as reference over its side's columns and finds the components.
+  std::vector<Detection> DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view,
+                                    FrontMatch* m);
+  // The ground point of a reference view's column x at disparity d (eq. 16).
+  bool ColumnToGround(const VirtualView& view, double x, double disparity, Eigen::Vector2d* ground) const;
+  // Whether pixel (x, y) votes for component `label`: a scored disparity in one of its bins.
+  bool InComponent(const FrontMatch& m, const cv::Mat& labels, int label, int x, int y) const;
+  // How high a component reaches above the road: of its columns' highest pixels (disparity in
+  // the component's bins), the height three quarters of the columns reach; NaN when none.
+  double TopHeight(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels,
+                   const HistogramComponent& c) const;
+  // The ground point of a component's first (or last) column with a centroid; false if none.
+  bool OuterPoint(const VirtualView& view, const HistogramComponent& c, bool last, Eigen::Vector2d* ground) const;
+
   FrontDetectorOptions options_;
   std::unique_ptr<VirtualView> left_, right_;
   Rig rig_;
   ViewSpec spec_;
   double vertical_offset_px_ = 0.0;
   int frames_ = 0;
-  // Whether pixel (x, y) votes for component `label`: a scored disparity in one of its bins.
-  bool InComponent(const FrontResult& r, const cv::Mat& labels, int label, int x, int y) const;
-  // How high a component reaches above the road: of its columns' highest pixels (disparity in
-  // the component's bins), the height three quarters of the columns reach; NaN when none.
-  double TopHeight(const FrontResult& r, const cv::Mat& labels, const HistogramComponent& c) const;
-  // The ground point of a component's first (or last) column with a centroid; false if none.
-  bool OuterPoint(const HistogramComponent& c, bool last, Eigen::Vector2d* ground) const;
-  std::unique_ptr<TemporalConsistencyFilter> temporal_;
-  std::unique_ptr<SadStereoMatcher> matcher_;
   double baseline_m_ = 0.0;
-  cv::Mat road_, ramp_;
-  cv::Mat ignore_;  // CV_8U, 255 where the left view sees nothing or the own car
+  Reference by_left_, by_right_;
+  int matched_columns_ = 0;  // columns of each reference matched: its side and a margin
+  Eigen::Vector2d midpoint_{0, 0}, across_{1, 0};  // the cameras' midpoint and the baseline's direction (ground)
 };
 
 }  // namespace dps

@@ -67,15 +67,22 @@ class SadStereoMatcher {
   SadStereoMatcher(const SadStereoMatcher&) = delete;
   SadStereoMatcher& operator=(const SadStereoMatcher&) = delete;
 
-  // Disparity of `left` (reference) against `right`: CV_8U or CV_8UC3 (converted to grey), same
-  // size, at least block size + num_disparities wide. Throws dps::Error for bad inputs.
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right);
+  // Disparity of `left` (reference) against `right`: CV_8U or CV_8UC3 (converted to grey), the
+  // same number of rows, at least block size + num_disparities columns. Throws dps::Error for bad
+  // inputs. The left image's first d_max = min_disparity + num_disparities - 1 and last
+  // -min_disparity columns have no disparity when the right image is the same size, since part
+  // of their search falls outside it. A wider right image (a view rendered beyond the left view's
+  // edges) lets them match: left column x then matches right column x + right_offset - d,
+  // 0 <= right_offset <= right.cols - left.cols; with d_max columns before the left view's first
+  // (right_offset = d_max) and -min_disparity after its last, every column matches but half a
+  // window at the edges.
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right, int right_offset = 0);
 
   const StereoOptions& options() const { return options_; }
 
  private:
   struct Workspace;
-  const cv::Mat& ComputeLevel(const cv::Mat& left_grey, const cv::Mat& right_grey,
+  const cv::Mat& ComputeLevel(const cv::Mat& left_grey, const cv::Mat& right_grey, int right_offset,
                               int min_disparity, int num_disparities, int level);
   StereoOptions options_;
   std::unique_ptr<Workspace> ws_;
