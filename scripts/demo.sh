@@ -25,4 +25,4 @@ echo "Surround map video:             $VIDEO   (frames: $OUT/results/$SCENE/map/
 echo "Detections / tracks:            $OUT/results/$SCENE/detections.csv, tracks.csv"
 head -n 4 "$OUT/results/$SCENE/detections.csv" | column -t -s, 2>/dev/null || head -n 4 "$OUT/results/$SCENE/detections.csv"
 echo "Scores (DESIGN.md §5):          $OUT/results/$SCENE/scores.txt, scores.json"
-echo "Other scenes: $0 overtaking | parked_cars | left_turn | truck_far | empty_road"
+echo "Other scenes: $0 overtaking | parked_cars | parked_left | left_turn | truck_far | empty_road"

@@ -13,7 +13,7 @@ T="$BUILD_DIR/tools"
 mkdir -p "$WORK"
 rows=()
 for size in 640x480 320x240; do
-  for scene in lead_car overtaking parked_cars left_turn truck_far empty_road; do
+  for scene in lead_car overtaking parked_cars parked_left left_turn truck_far empty_road; do
     drive="$WORK/$size/drives/$scene"
     "$T/dps-synth" "$ROOT/data/scenes/$scene.yaml" --size "$size" --out "$drive" --force --quiet
     "$T/dps-process" "$drive" --out "$WORK/$size/out" --force --quiet --no-video
@@ -26,7 +26,7 @@ for size in 640x480 320x240; do
 done
 seeds=()
 for seed in 11 21; do
-  for scene in lead_car overtaking parked_cars left_turn empty_road; do
+  for scene in lead_car overtaking parked_cars parked_left left_turn empty_road; do
     drive="$WORK/seeds/drives/${scene}_$seed"
     "$T/dps-synth" "$ROOT/data/scenes/$scene.yaml" --seed "$seed" --out "$drive" --force --quiet
     "$T/dps-process" "$drive" --out "$WORK/seeds/out" --force --quiet --no-video

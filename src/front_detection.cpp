@@ -32,8 +32,8 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   across_ = Eigen::Vector2d(r.x() - l.x(), r.z() - l.z()).normalized();
   // Half the view and an eighth: what lies beyond the left camera is left of the right view's
   // centre, and what reaches beyond it lies right of the left view's centre; the eighth keeps the
-  // parts of wide objects that stretch farther. The skipped columns are even in number, so that the matcher's
-  // half-resolution level keeps the grid of the whole view.
+  // parts of wide objects that stretch farther. The skipped columns are even in number, so that
+  // the matcher's half-resolution level keeps the grid of the whole view.
   matched_columns_ = spec_.width - std::max(0, (spec_.width / 2 - spec_.width / 8) / 2 * 2);
   by_left_.view = left_.get();
   by_right_.view = right_.get();
@@ -175,7 +175,7 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
   for (const Detection& d : by_right_.found) {
     bool joined = false;
     for (Detection& e : r->detections) {
-      const std::vector<Detection> fused = FuseDetections({e, d}, options_.straddle_merge_m);
+      const std::vector<Detection> fused = FuseDetections({e, d}, options_.reference_overlap_m);
       if (fused.size() == 1) {
         e = fused.front();
         joined = true;
@@ -183,6 +183,15 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
       }
     }
     if (!joined) r->detections.push_back(d);
+  }
+  // What the left view saw wholly beyond the left camera, where the right view found nothing
+  // (an object near that line whose parts the matching noise put on either side).
+  for (const Detection& e : by_left_.beyond) {
+    bool covered = false;
+    for (const Detection& d : by_right_.found) {
+      covered = covered || FuseDetections({e, d}, options_.reference_overlap_m).size() == 1;
+    }
+    if (!covered) r->detections.push_back(e);
   }
   for (size_t i = 0; i < r->detections.size(); ++i) r->detections[i].id = static_cast<int>(i);
 }
@@ -201,8 +210,13 @@ std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& 
     reference = left_view;
     other = right_view;
   }
+  // Matched from 16 columns earlier (even, for the half-resolution grid), which are then dropped:
+  // the prefilter and the windows see real image there, not the crop's replicated border.
+  const int from = std::max(0, first - 16);
   cv::Mat disparity(reference.size(), CV_32F, cv::Scalar(kInvalidDisparity));
-  ref.matcher->Compute(reference.colRange(first, w), other, first).copyTo(disparity.colRange(first, w));
+  ref.matcher->Compute(reference.colRange(from, w), other, from)
+      .colRange(first - from, w - from)
+      .copyTo(disparity.colRange(first, w));
   if (ref.mirrored) cv::flip(disparity, disparity, 1);
   m->disparity = disparity;
   m->disparity.setTo(kInvalidDisparity, ref.ignore);
@@ -235,6 +249,7 @@ std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& 
                      options_.histogram, &labels, link);
   m->obstacle = cv::Mat(m->histogram.size(), CV_32F, cv::Scalar(0));
   std::vector<Detection> detections;
+  ref.beyond.clear();
   const auto [first_valid, last_valid] = ValidColumns(m->disparity);
   const int margin = options_.stereo.block_width;
   for (const HistogramComponent& c : components) {
@@ -269,8 +284,11 @@ std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& 
       columns.emplace_back(x, d);
       reach = std::max(reach, (g - midpoint_).dot(across_));
     }
-    // The right view keeps what lies wholly beyond the left camera, the left view the rest.
-    if (points.empty() || (reach >= -baseline_m_ / 2) == ref.mirrored) continue;
+    // The right view keeps what lies wholly beyond the left camera, the left view the rest (and
+    // what it sees beyond, in case the right view finds nothing there).
+    if (points.empty()) continue;
+    const bool beyond = reach < -baseline_m_ / 2;
+    if (ref.mirrored && !beyond) continue;
     for (const auto& [x, d] : columns) {
       const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);
       if (row >= 0 && row < m->obstacle.rows) m->obstacle.at<float>(row, x) = d;
@@ -278,8 +296,9 @@ std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& 
     Detection det = DetectionFromPoints(points, "front");
     if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
     if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
-    det.id = static_cast<int>(detections.size());
-    detections.push_back(std::move(det));
+    std::vector<Detection>& into = beyond && !ref.mirrored ? ref.beyond : detections;
+    det.id = static_cast<int>(into.size());
+    into.push_back(std::move(det));
   }
   return detections;
 }

@@ -508,15 +508,16 @@ void TestCarsInRow() {
   CHECK_EQ(without, 0);
 }
 
-// The same two cars parked on the left (x -4.3..-2.5): each side of the road is matched with the
-// farther camera's view as the reference, so the second car is found as on the right. With the
-// left view as the reference on both sides, the first car hid the second one's side from it:
-// frames 1-16 of the mirrored parked row missed it (recall 0.81 against 0.935 on the right).
+// The same two cars parked on the left (x -4.3..-2.5), at frame 8 (z -0.52..3.98 and 5.48..9.98):
+// objects beyond the left camera are matched with the right view as the reference, so the second
+// car is found as on the right. With the left view as the only reference the first car hid the
+// second one's side from it and no detection lay on the second car in this frame (nor in frame
+// 14; the mirrored parked row's recall was 0.81 against 0.935 on the right).
 void TestRowOnTheLeft() {
   for (const double side : {1.0, -1.0}) {
     std::vector<dps::TruthRow> truth;
     const std::vector<dps::Detection> detections = FrontOfParkedRow(
-        {Parked(1, "car", side * 3.4, 6.0, 2), Parked(2, "car", side * 3.4, 12.0, 3)}, ParkedRowFrontOptions(), 5,
+        {Parked(1, "car", side * 3.4, 6.0, 2), Parked(2, "car", side * 3.4, 12.0, 3)}, ParkedRowFrontOptions(), 8,
         &truth);
     const int found = Found(detections, truth.at(1));
     std::printf("second of two parked cars on the %s: %d detection(s) on it\n", side > 0 ? "right" : "left", found);

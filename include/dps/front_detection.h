@@ -47,9 +47,9 @@ struct FrontDetectorOptions {
   // parked cars in a row (0 = no such test).
   double link_free_gap_m = 1.0;
   double link_vehicle_length_m = 5.5;
-  // A right-view detection whose points come this close to a left-view one is part of the same
-  // object (see FrontDetector), m.
-  double straddle_merge_m = 0.5;
+  // Detections of the two references whose points come this close are one object (see
+  // FrontDetector), m.
+  double reference_overlap_m = 0.5;
   double max_range_m = 60.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
   // Components whose pixels reach less than this above the road (median over columns) are flat
@@ -96,10 +96,13 @@ struct FrontResult {
 // cars on the left, with the left view as reference, lost the second car behind the first for ten
 // frames). The right view (matched mirrored) is the reference for components lying wholly beyond
 // the left camera (on the far side of the line through it, parallel to the view axis), the left
-// view for all others: between the cameras both see alike, and the left view as before. Each
-// reference is matched over the columns that can show its objects, up to an eighth of the view
-// past its centre, so the two cost little more than one full matching; their first d_max columns,
-// which the other view cannot match, show only the other reference's objects.
+// view for all others: between the cameras both see alike, and the left view as before. A left
+// view component wholly beyond the left camera still counts where no right view one lies within
+// reference_overlap_m of it (an object near the line, put beyond it by matching noise); a right
+// view component that close to a left view detection joins it. Each reference is matched over
+// the columns that can show its objects, up to an eighth of the view past its centre, so the two
+// cost less than twice one matching; their first d_max columns, which the other view cannot
+// match, show only the other reference's objects.
 class FrontDetector {
  public:
   // Builds both views and the road disparity image for the rig's "left" and "right" cameras.
@@ -137,6 +140,7 @@ class FrontDetector {
     std::unique_ptr<TemporalConsistencyFilter> temporal;
     std::unique_ptr<SadStereoMatcher> matcher;  // one per reference: the two run concurrently
     std::vector<Detection> found;               // this frame's components on its side
+    std::vector<Detection> beyond;              // the left view's wholly beyond the left camera
   };
   // Road, ramp and ignore mask of a reference (after the views are built or rebuilt).
   void Prepare(Reference* ref) const;
