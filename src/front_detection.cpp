@@ -30,11 +30,15 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   baseline_m_ = (r - l).norm();
   midpoint_ = Eigen::Vector2d((l.x() + r.x()) / 2, (l.z() + r.z()) / 2);
   across_ = Eigen::Vector2d(r.x() - l.x(), r.z() - l.z()).normalized();
-  // Half the view and an eighth: what lies beyond the left camera is left of the right view's
-  // centre, and what reaches beyond it lies right of the left view's centre; the eighth keeps the
-  // parts of wide objects that stretch farther. The skipped columns are even in number, so that
-  // the matcher's half-resolution level keeps the grid of the whole view.
-  matched_columns_ = spec_.width - std::max(0, (spec_.width / 2 - spec_.width / 8) / 2 * 2);
+  // The columns each reference matches (in matching coordinates: the right view mirrored), from
+  // an even one, so that the matcher's half-resolution level keeps the grid of the whole view.
+  // What reaches beyond the left camera lies right of the left view's centre: the left view
+  // matches from an eighth of the view before its centre, which keeps the parts of wide objects
+  // that stretch farther. What lies wholly beyond it lies left of the right view's centre, by
+  // f B / 60 m (6 px at 640x480) or more: the right view matches up to 16 columns past its centre.
+  const int w = spec_.width;
+  by_left_.first = std::max(0, (w / 2 - w / 8) / 2 * 2);
+  by_right_.first = std::max(0, (w / 2 - 16) / 2 * 2);
   by_left_.view = left_.get();
   by_right_.view = right_.get();
   by_right_.mirrored = true;
@@ -199,9 +203,9 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
 std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view,
                                                  FrontMatch* m) {
   const VirtualView& view = *ref.view;
-  // The reference's columns that show its side, matched against the whole other view: the left
-  // view's last matched_columns_, the right view's first (mirrored: its last, too).
-  const int w = spec_.width, first = w - matched_columns_;
+  // The reference's columns that can show its objects, from ref.first on (the right view's
+  // mirrored), matched against the other view's columns their search reaches.
+  const int w = spec_.width, first = ref.first;
   cv::Mat reference, other;
   if (ref.mirrored) {
     cv::flip(right_view, reference, 1);  // into new images: the views are shared with the other task
@@ -213,8 +217,10 @@ std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& 
   // Matched from 16 columns earlier (even, for the half-resolution grid), which are then dropped:
   // the prefilter and the windows see real image there, not the crop's replicated border.
   const int from = std::max(0, first - 16);
+  const int d_max = options_.stereo.min_disparity + options_.stereo.num_disparities - 1;
+  const int other_from = std::max(0, from - std::max(0, d_max)) / 2 * 2;
   cv::Mat disparity(reference.size(), CV_32F, cv::Scalar(kInvalidDisparity));
-  ref.matcher->Compute(reference.colRange(from, w), other, from)
+  ref.matcher->Compute(reference.colRange(from, w), other.colRange(other_from, w), from - other_from)
       .colRange(first - from, w - from)
       .copyTo(disparity.colRange(first, w));
   if (ref.mirrored) cv::flip(disparity, disparity, 1);

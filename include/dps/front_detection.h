@@ -100,9 +100,10 @@ struct FrontResult {
 // view component wholly beyond the left camera still counts where no right view one lies within
 // reference_overlap_m of it (an object near the line, put beyond it by matching noise); a right
 // view component that close to a left view detection joins it. Each reference is matched over
-// the columns that can show its objects, up to an eighth of the view past its centre, so the two
-// cost less than twice one matching; their first d_max columns, which the other view cannot
-// match, show only the other reference's objects.
+// the columns that can show its objects (the left view from an eighth of the view before its
+// centre, the right view up to 16 columns past its centre), so the two cost less than twice one
+// matching; their first d_max columns, which the other view cannot match, show only the other
+// reference's objects.
 class FrontDetector {
  public:
   // Builds both views and the road disparity image for the rig's "left" and "right" cameras.
@@ -138,6 +139,7 @@ class FrontDetector {
     cv::Mat road, ramp;                  // the road's disparity at its pixels; ScoreImage's ramp
     cv::Mat ignore;                      // CV_8U, 255 where it sees nothing or the own car
     std::unique_ptr<TemporalConsistencyFilter> temporal;
+    int first = 0;                              // its first matched column (mirrored for the right view)
     std::unique_ptr<SadStereoMatcher> matcher;  // one per reference: the two run concurrently
     std::vector<Detection> found;               // this frame's components on its side
     std::vector<Detection> beyond;              // the left view's wholly beyond the left camera
@@ -166,7 +168,6 @@ class FrontDetector {
   int frames_ = 0;
   double baseline_m_ = 0.0;
   Reference by_left_, by_right_;
-  int matched_columns_ = 0;  // columns of each reference matched: its side and a margin
   Eigen::Vector2d midpoint_{0, 0}, across_{1, 0};  // the cameras' midpoint and the baseline's direction (ground)
 };
 
