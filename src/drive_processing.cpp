@@ -169,10 +169,10 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
         const double sd0 = po.side.stereo.min_disparity, sd1 = sd0 + po.side.stereo.num_disparities;
         cv::Mat all;
         cv::hconcat(std::vector<cv::Mat>{
-                        DrawDiagnostics("front, left view as reference", out.front.left_view, out.front.right_view,
+                        DrawDiagnostics("front (left view)", out.front.left_view, out.front.right_view,
                                         out.front.by_left.disparity, out.front.by_left.histogram,
                                         out.front.by_left.obstacle, fd0, fd1, panel),
-                        DrawDiagnostics("front, right view as reference", out.front.right_view, out.front.left_view,
+                        DrawDiagnostics("front (right view)", out.front.right_view, out.front.left_view,
                                         out.front.by_right.disparity, out.front.by_right.histogram,
                                         out.front.by_right.obstacle, fd0, fd1, panel),
                         DrawDiagnostics("left", out.left.reference_view, out.left.other_view, out.left.disparity,

@@ -168,8 +168,8 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
 }
 
 void FrontDetector::MatchReference(int reference, FrontResult* r) {
-  Reference& ref = reference == 0 ? by_left_ : by_right_;
-  ref.found = DetectWith(ref, r->left_view, r->right_view, reference == 0 ? &r->by_left : &r->by_right);
+  DetectWith(reference == 0 ? by_left_ : by_right_, r->left_view, r->right_view,
+             reference == 0 ? &r->by_left : &r->by_right);
 }
 
 void FrontDetector::CombineReferences(FrontResult* r) const {
@@ -200,8 +200,7 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
   for (size_t i = 0; i < r->detections.size(); ++i) r->detections[i].id = static_cast<int>(i);
 }
 
-std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view,
-                                                 FrontMatch* m) {
+void FrontDetector::DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view, FrontMatch* m) {
   const VirtualView& view = *ref.view;
   // The reference's columns that can show its objects, from ref.first on (the right view's
   // mirrored), matched against the other view's columns their search reaches.
@@ -254,7 +253,7 @@ std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& 
       LinkComponents(FindComponents(m->histogram, options_.histogram, &labels, moments), m->disparity, ref.road,
                      options_.histogram, &labels, link);
   m->obstacle = cv::Mat(m->histogram.size(), CV_32F, cv::Scalar(0));
-  std::vector<Detection> detections;
+  ref.found.clear();
   ref.beyond.clear();
   const auto [first_valid, last_valid] = ValidColumns(m->disparity);
   const int margin = options_.stereo.block_width;
@@ -302,11 +301,10 @@ std::vector<Detection> FrontDetector::DetectWith(Reference& ref, const cv::Mat& 
     Detection det = DetectionFromPoints(points, "front");
     if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
     if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
-    std::vector<Detection>& into = beyond && !ref.mirrored ? ref.beyond : detections;
+    std::vector<Detection>& into = beyond && !ref.mirrored ? ref.beyond : ref.found;
     det.id = static_cast<int>(into.size());
     into.push_back(std::move(det));
   }
-  return detections;
 }
 
 }  // namespace dps

@@ -146,9 +146,9 @@ class FrontDetector {
   };
   // Road, ramp and ignore mask of a reference (after the views are built or rebuilt).
   void Prepare(Reference* ref) const;
-  // Matches the pair with `ref` as reference over its side's columns and finds the components.
-  std::vector<Detection> DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view,
-                                    FrontMatch* m);
+  // Matches the pair with `ref` as reference over its columns, finds the components and keeps
+  // those on its side in ref.found (the left view's wholly beyond the left camera in ref.beyond).
+  void DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view, FrontMatch* m);
   // The ground point of a reference view's column x at disparity d (eq. 16).
   bool ColumnToGround(const VirtualView& view, double x, double disparity, Eigen::Vector2d* ground) const;
   // Whether pixel (x, y) votes for component `label`: a scored disparity in one of its bins.
