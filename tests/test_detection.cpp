@@ -489,19 +489,20 @@ int Found(const std::vector<dps::Detection>& detections, const dps::TruthRow& tr
 // Two cars parked in a row on the right, 1.5 m apart (the parked row's first two; at frame 5
 // z 1.08..5.58 and 7.08..11.58): their sides lie on one plane and the gap between them shows
 // only the second car's untextured front, so the two sides qualify for linking — but together
-// they are 10.5 m long. Returns the detections on the second car.
-int SecondCarFound(double link_vehicle_length_m) {
-  dps::FrontDetectorOptions options = ParkedRowFrontOptions();
-  options.link_vehicle_length_m = link_vehicle_length_m;
+// they are 10.5 m long. Returns the detections on the second car at `frame`, the cars on the
+// right (side 1) or mirrored to the left (side -1).
+int SecondCarFound(const dps::FrontDetectorOptions& options, double side, int frame) {
   std::vector<dps::TruthRow> truth;
-  const std::vector<dps::Detection> detections =
-      FrontOfParkedRow({Parked(1, "car", 3.4, 6.0, 2), Parked(2, "car", 3.4, 12.0, 3)}, options, 5, &truth);
+  const std::vector<dps::Detection> detections = FrontOfParkedRow(
+      {Parked(1, "car", side * 3.4, 6.0, 2), Parked(2, "car", side * 3.4, 12.0, 3)}, options, frame, &truth);
   return Found(detections, truth.at(1));
 }
 
 void TestCarsInRow() {
-  const int with_rule = SecondCarFound(dps::FrontDetectorOptions().link_vehicle_length_m);
-  const int without = SecondCarFound(0.0);
+  dps::FrontDetectorOptions without_rule = ParkedRowFrontOptions();
+  without_rule.link_vehicle_length_m = 0.0;
+  const int with_rule = SecondCarFound(ParkedRowFrontOptions(), 1.0, 5);
+  const int without = SecondCarFound(without_rule, 1.0, 5);
   std::printf("second of two parked cars: %d detection(s) on it with the vehicle-length rule, %d without\n",
               with_rule, without);
   CHECK_EQ(with_rule, 1);
@@ -515,11 +516,7 @@ void TestCarsInRow() {
 // 14; the mirrored parked row's recall was 0.81 against 0.935 on the right).
 void TestRowOnTheLeft() {
   for (const double side : {1.0, -1.0}) {
-    std::vector<dps::TruthRow> truth;
-    const std::vector<dps::Detection> detections = FrontOfParkedRow(
-        {Parked(1, "car", side * 3.4, 6.0, 2), Parked(2, "car", side * 3.4, 12.0, 3)}, ParkedRowFrontOptions(), 8,
-        &truth);
-    const int found = Found(detections, truth.at(1));
+    const int found = SecondCarFound(ParkedRowFrontOptions(), side, 8);
     std::printf("second of two parked cars on the %s: %d detection(s) on it\n", side > 0 ? "right" : "left", found);
     CHECK_EQ(found, 1);
   }
