@@ -28,7 +28,7 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   right_ = std::make_unique<VirtualView>(rig.Camera("right"), spec_);
   const Eigen::Vector3d l = rig.Camera("left").vehicle_from_camera.t, r = rig.Camera("right").vehicle_from_camera.t;
   baseline_m_ = (r - l).norm();
-  midpoint_ = Eigen::Vector2d((l.x() + r.x()) / 2, (l.z() + r.z()) / 2);
+  left_camera_ = Eigen::Vector2d(l.x(), l.z());
   across_ = Eigen::Vector2d(r.x() - l.x(), r.z() - l.z()).normalized();
   // The columns each reference matches (in matching coordinates: the right view mirrored), from
   // an even one, so that the matcher's half-resolution level keeps the grid of the whole view.
@@ -42,8 +42,8 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   by_left_.view = left_.get();
   by_right_.view = right_.get();
   by_right_.mirrored = true;
+  PrepareReferences();
   for (Reference* ref : {&by_left_, &by_right_}) {
-    Prepare(ref);
     ref->matcher = std::make_unique<SadStereoMatcher>(options.stereo);
     if (options.temporal_max_variance_px2 > 0) {
       ref->temporal = std::make_unique<TemporalConsistencyFilter>(options.temporal_forgetting,
@@ -54,12 +54,16 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
 
 FrontDetector::~FrontDetector() = default;
 
-void FrontDetector::Prepare(Reference* ref) const {
-  const VirtualView& view = *ref->view;
-  const ViewSpec& spec = view.spec();
+void FrontDetector::PrepareReferences() {
   cv::Mat own = OwnCarMask(*left_, rig_.vehicle, options_.own_car_height_m);
   cv::bitwise_or(own, OwnCarMask(*right_, rig_.vehicle, options_.own_car_height_m), own);
-  cv::bitwise_or(own, view.mask() == 0, ref->ignore);
+  for (Reference* ref : {&by_left_, &by_right_}) Prepare(own, ref);
+}
+
+void FrontDetector::Prepare(const cv::Mat& own_car, Reference* ref) const {
+  const VirtualView& view = *ref->view;
+  const ViewSpec& spec = view.spec();
+  cv::bitwise_or(own_car, view.mask() == 0, ref->ignore);
   // The road's disparity at every pixel of the reference view.
   ref->road = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(kInvalidDisparity));
   const Eigen::Vector3d origin = view.viewpoint_vehicle();
@@ -137,8 +141,8 @@ double FrontDetector::TopHeight(const VirtualView& view, const FrontMatch& m, co
 FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right_omni) {
   FrontResult r;
   RenderViews(left_omni, right_omni, &r);
-  MatchReference(0, &r);
-  MatchReference(1, &r);
+  MatchReference(FrontReference::kLeftView, &r);
+  MatchReference(FrontReference::kRightView, &r);
   CombineReferences(&r);
   return r;
 }
@@ -158,8 +162,7 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
       shifted.cy -= vertical_offset_px_;
       right_ = std::make_unique<VirtualView>(rig_.Camera("right"), shifted);
       by_right_.view = right_.get();
-      Prepare(&by_left_);
-      Prepare(&by_right_);
+      PrepareReferences();
       right_->Render(GreyImage(right_omni), r.right_view);
     }
   }
@@ -167,9 +170,9 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
   ++frames_;
 }
 
-void FrontDetector::MatchReference(int reference, FrontResult* r) {
-  DetectWith(reference == 0 ? by_left_ : by_right_, r->left_view, r->right_view,
-             reference == 0 ? &r->by_left : &r->by_right);
+void FrontDetector::MatchReference(FrontReference reference, FrontResult* r) {
+  const bool left = reference == FrontReference::kLeftView;
+  DetectWith(left ? by_left_ : by_right_, r->left_view, r->right_view, left ? &r->by_left : &r->by_right);
 }
 
 void FrontDetector::CombineReferences(FrontResult* r) const {
@@ -280,19 +283,20 @@ void FrontDetector::DetectWith(Reference& ref, const cv::Mat& left_view, const c
     const auto [from, to] = ProjectedColumns(c, options_.stereo.block_width / 2);
     std::vector<Eigen::Vector2d> points;
     std::vector<std::pair<int, float>> columns;
-    double reach = -std::numeric_limits<double>::infinity();  // farthest point towards the right camera
+    // The farthest point towards the right camera, along the baseline from the left camera.
+    double reach = -std::numeric_limits<double>::infinity();
     for (int x = from; x <= to; ++x) {
       const float d = c.column_disparity[x - c.x_begin];
       Eigen::Vector2d g;
       if (!std::isfinite(d) || !ColumnToGround(view, x, d, &g) || g.norm() > options_.max_range_m) continue;
       points.push_back(g);
       columns.emplace_back(x, d);
-      reach = std::max(reach, (g - midpoint_).dot(across_));
+      reach = std::max(reach, (g - left_camera_).dot(across_));
     }
     // The right view keeps what lies wholly beyond the left camera, the left view the rest (and
     // what it sees beyond, in case the right view finds nothing there).
     if (points.empty()) continue;
-    const bool beyond = reach < -baseline_m_ / 2;
+    const bool beyond = reach < 0;
     if (ref.mirrored && !beyond) continue;
     for (const auto& [x, d] : columns) {
       const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);

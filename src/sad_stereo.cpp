@@ -215,8 +215,8 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
 cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_in, int right_offset) {
   const cv::Mat left = ToGrey(left_in, "left"), right = ToGrey(right_in, "right");
   if (left.rows != right.rows || right.cols < left.cols) {
-    throw Error(Str("stereo: the right image (", right.cols, "x", right.rows, ") must have the left's rows and at least its columns (",
-                    left.cols, "x", left.rows, ")"));
+    throw Error(Str("stereo: the right image (", right.cols, "x", right.rows,
+                    ") must have the left's rows and at least its columns (", left.cols, "x", left.rows, ")"));
   }
   if (right_offset < 0 || right_offset > right.cols - left.cols) {
     throw Error(Str("stereo: right_offset = ", right_offset, ": violated constraint 0..", right.cols - left.cols,

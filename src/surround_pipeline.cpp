@@ -123,8 +123,8 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
         const int task = tasks[i];
         const auto start = now();
         try {
-          if (task == kFront) front_->MatchReference(0, &out.front);
-          if (task == kFrontRight) front_->MatchReference(1, &out.front);
+          if (task == kFront) front_->MatchReference(FrontReference::kLeftView, &out.front);
+          if (task == kFrontRight) front_->MatchReference(FrontReference::kRightView, &out.front);
           if (task == kLeft) out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt);
           if (task == kRight) out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt);
           if (task >= kAlongside) alongside[task - kAlongside]();

@@ -91,6 +91,8 @@ struct FrontResult {
   bool drift_measured = false;        // the offset was measured on this frame
 };
 
+enum class FrontReference { kLeftView, kRightView };
+
 // Objects beside the road are matched with the farther camera's view as the reference: it sees
 // them less obliquely, so that a nearer object hides less of the ones behind it (a row of parked
 // cars on the left, with the left view as reference, lost the second car behind the first for ten
@@ -116,10 +118,10 @@ class FrontDetector {
 
   // Detect in three steps, so that the two references can run as concurrent tasks (Detect takes
   // them in turn): the views (and drift correction); the matching and components with one
-  // reference (0: the left view, 1: the right view; the two may run at once); the detections of
-  // both. Steps of one frame in this order, frames in order.
+  // reference (the two may run at once); the detections of both. Steps of one frame in this
+  // order, frames in order.
   void RenderViews(const cv::Mat& left_omni, const cv::Mat& right_omni, FrontResult* r);
-  void MatchReference(int reference, FrontResult* r);
+  void MatchReference(FrontReference reference, FrontResult* r);
   void CombineReferences(FrontResult* r) const;
 
   // The ground point (vehicle frame x, z) of left view column x at disparity d (eq. 16); false
@@ -144,8 +146,10 @@ class FrontDetector {
     std::vector<Detection> found;               // this frame's components on its side
     std::vector<Detection> beyond;              // the left view's wholly beyond the left camera
   };
-  // Road, ramp and ignore mask of a reference (after the views are built or rebuilt).
-  void Prepare(Reference* ref) const;
+  // Road, ramp and ignore mask of both references (after the views are built or rebuilt), and of
+  // one, given the own car as both views see it.
+  void PrepareReferences();
+  void Prepare(const cv::Mat& own_car, Reference* ref) const;
   // Matches the pair with `ref` as reference over its columns, finds the components and keeps
   // those on its side in ref.found (the left view's wholly beyond the left camera in ref.beyond).
   void DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view, FrontMatch* m);
@@ -168,7 +172,7 @@ class FrontDetector {
   int frames_ = 0;
   double baseline_m_ = 0.0;
   Reference by_left_, by_right_;
-  Eigen::Vector2d midpoint_{0, 0}, across_{1, 0};  // the cameras' midpoint and the baseline's direction (ground)
+  Eigen::Vector2d left_camera_{0, 0}, across_{1, 0};  // the left camera and the baseline's direction (ground)
 };
 
 }  // namespace dps
