@@ -105,11 +105,15 @@ std::vector<HistogramComponent> FindComponents(const cv::Mat& histogram, const H
                    cv::getStructuringElement(cv::MORPH_RECT, cv::Size(o.close_width, o.close_height)));
   cv::Mat mask = smooth >= o.threshold;
   if (o.far_reference_px > 0) {
+    // Per bin its own threshold (a plain loop: one cv::compare per bin cost more in calls than
+    // in comparing), in float as cv::compare would.
     cv::Mat far(smooth.size(), CV_8U), clear;
     for (int b = 0; b < smooth.rows; ++b) {
       const double fraction = std::clamp(BinDisparity(o, b) / o.far_reference_px, o.far_min_fraction, 1.0);
-      cv::Mat row = far.row(b);
-      cv::compare(smooth.row(b), cv::Scalar(o.threshold * fraction), row, cv::CMP_GE);
+      const float threshold = static_cast<float>(o.threshold * fraction);
+      const float* s = smooth.ptr<float>(b);
+      std::uint8_t* f = far.ptr<std::uint8_t>(b);
+      for (int x = 0; x < smooth.cols; ++x) f[x] = s[x] >= threshold ? 255 : 0;
     }
     cv::dilate(mask, clear, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(o.far_clearance_columns, 3)));
     mask |= far & ~clear;

@@ -5,6 +5,7 @@
 #include <functional>
 #include <limits>
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "dps/error.h"
@@ -30,15 +31,14 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   baseline_m_ = (r - l).norm();
   left_camera_ = Eigen::Vector2d(l.x(), l.z());
   across_ = Eigen::Vector2d(r.x() - l.x(), r.z() - l.z()).normalized();
-  // The columns each reference matches (in matching coordinates: the right view mirrored), from
-  // an even one, so that the matcher's half-resolution level keeps the grid of the whole view.
+  // The columns each reference matches (in matching coordinates: the right view mirrored).
   // What reaches beyond the left camera lies right of the left view's centre: the left view
   // matches from an eighth of the view before its centre, which keeps the parts of wide objects
   // that stretch farther. What lies wholly beyond it lies left of the right view's centre, by
   // f B / 60 m (6 px at 640x480) or more: the right view matches up to 16 columns past its centre.
   const int w = spec_.width;
-  by_left_.first = std::max(0, (w / 2 - w / 8) / 2 * 2);
-  by_right_.first = std::max(0, (w / 2 - 16) / 2 * 2);
+  by_left_.first = std::max(0, w / 2 - w / 8);
+  by_right_.first = std::max(0, w / 2 - 16);
   by_left_.view = left_.get();
   by_right_.view = right_.get();
   by_right_.mirrored = true;
@@ -149,8 +149,17 @@ FrontResult FrontDetector::Detect(const cv::Mat& left_omni, const cv::Mat& right
 
 void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_omni, FrontResult* out) {
   FrontResult& r = *out;
-  left_->Render(GreyImage(left_omni), r.left_view);
-  right_->Render(GreyImage(right_omni), r.right_view);
+  // Each view rendered and prefiltered for matching at once (the pipeline calls this before its
+  // concurrent tasks; OpenCV runs the filters inside serially then).
+  const SadStereoMatcher& matcher = *by_left_.matcher;  // Prepare is const: safe from both
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      if (i == 0) left_->Render(GreyImage(left_omni), r.left_view);
+      if (i == 0) matcher.Prepare(r.left_view, &left_prepared_);
+      if (i == 1) right_->Render(GreyImage(right_omni), r.right_view);
+      if (i == 1) matcher.Prepare(r.right_view, &right_prepared_);
+    }
+  });
   // Drift: measure the rows' misalignment now and then, and rebuild the right view to cancel it.
   if (options_.drift_interval > 0 && frames_ % options_.drift_interval == 0) {
     const VerticalOffset off = EstimateVerticalOffset(r.left_view, r.right_view, options_.stereo.min_disparity,
@@ -164,6 +173,7 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
       by_right_.view = right_.get();
       PrepareReferences();
       right_->Render(GreyImage(right_omni), r.right_view);
+      matcher.Prepare(r.right_view, &right_prepared_);
     }
   }
   r.vertical_offset_px = vertical_offset_px_;
@@ -172,7 +182,7 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
 
 void FrontDetector::MatchReference(FrontReference reference, FrontResult* r) {
   const bool left = reference == FrontReference::kLeftView;
-  DetectWith(left ? by_left_ : by_right_, r->left_view, r->right_view, left ? &r->by_left : &r->by_right);
+  DetectWith(left ? by_left_ : by_right_, left ? &r->by_left : &r->by_right);
 }
 
 void FrontDetector::CombineReferences(FrontResult* r) const {
@@ -203,28 +213,25 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
   for (size_t i = 0; i < r->detections.size(); ++i) r->detections[i].id = static_cast<int>(i);
 }
 
-void FrontDetector::DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view, FrontMatch* m) {
+void FrontDetector::DetectWith(Reference& ref, FrontMatch* m) {
   const VirtualView& view = *ref.view;
   // The reference's columns that can show its objects, from ref.first on (the right view's
-  // mirrored), matched against the other view's columns their search reaches.
-  const int w = spec_.width, first = ref.first;
-  cv::Mat reference, other;
+  // mirrored), against the whole other view.
+  const SadStereoMatcher::PreparedView* reference = &left_prepared_;
+  const SadStereoMatcher::PreparedView* other = &right_prepared_;
   if (ref.mirrored) {
-    cv::flip(right_view, reference, 1);  // into new images: the views are shared with the other task
-    cv::flip(left_view, other, 1);
-  } else {
-    reference = left_view;
-    other = right_view;
+    // Into the reference's own copies: the prepared views are shared with the other task.
+    SadStereoMatcher::Mirror(right_prepared_, &ref.mirrored_reference);
+    SadStereoMatcher::Mirror(left_prepared_, &ref.mirrored_other);
+    reference = &ref.mirrored_reference;
+    other = &ref.mirrored_other;
   }
-  // Matched from 16 columns earlier (even, for the half-resolution grid), which are then dropped:
-  // the prefilter and the windows see real image there, not the crop's replicated border.
-  const int from = std::max(0, first - 16);
-  const int d_max = options_.stereo.min_disparity + options_.stereo.num_disparities - 1;
-  const int other_from = std::max(0, from - std::max(0, d_max)) / 2 * 2;
-  cv::Mat disparity(reference.size(), CV_32F, cv::Scalar(kInvalidDisparity));
-  ref.matcher->Compute(reference.colRange(from, w), other.colRange(other_from, w), from - other_from)
-      .colRange(first - from, w - from)
-      .copyTo(disparity.colRange(first, w));
+  // Matched from 16 columns earlier, which are then dropped: the left-right check of the first
+  // columns then weighs the matches of the columns before them too, as when the whole view is
+  // matched.
+  const int first = ref.first;
+  cv::Mat disparity = ref.matcher->Compute(*reference, *other, std::max(0, first - 16));
+  disparity.colRange(0, first).setTo(kInvalidDisparity);
   if (ref.mirrored) cv::flip(disparity, disparity, 1);
   m->disparity = disparity;
   m->disparity.setTo(kInvalidDisparity, ref.ignore);

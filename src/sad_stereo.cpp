@@ -63,13 +63,9 @@ struct StripeBuffers {
 };
 
 // Everything one pyramid level needs between calls.
-struct PrefilterBuffers {
-  cv::Mat f, blurred, log, shifted;
-};
-
 struct LevelBuffers {
-  PrefilterBuffers scratch_left, scratch_right;
-  cv::Mat left, right, gradient, magnitude, window_sum, textured, out;
+  cv::Mat scratch_left[4], scratch_right[4];  // the prefilter's temporaries
+  cv::Mat left, right, textured, out;
   std::vector<StripeBuffers> stripes;
 };
 
@@ -113,28 +109,47 @@ void StereoOptions::Check() const {
 
 namespace {
 
-// The LoG prefilter into `out`, reusing the temporaries in `buf`.
-void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap,
-                      PrefilterBuffers& buf, cv::Mat& out) {
+// The LoG prefilter into `out`, reusing the temporaries scratch[0..3].
+void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap, cv::Mat* scratch, cv::Mat& out) {
+  cv::Mat &f = scratch[0], &blurred = scratch[1], &log = scratch[2], &shifted = scratch[3];
   // In floating point: blurring into 8 bits first would quantise the image, and the Laplacian
   // would amplify the rounding into noise that swamps weak texture.
-  grey.convertTo(buf.f, CV_32F);
+  grey.convertTo(f, CV_32F);
   const int ksize = 2 * static_cast<int>(std::ceil(3.0 * sigma_px)) + 1;  // +-3 sigma
-  cv::GaussianBlur(buf.f, buf.blurred, cv::Size(ksize, ksize), sigma_px, sigma_px, cv::BORDER_REPLICATE);
-  cv::Laplacian(buf.blurred, buf.log, CV_32F, 1, gain, 0.0, cv::BORDER_REPLICATE);
+  cv::GaussianBlur(f, blurred, cv::Size(ksize, ksize), sigma_px, sigma_px, cv::BORDER_REPLICATE);
+  cv::Laplacian(blurred, log, CV_32F, 1, gain, 0.0, cv::BORDER_REPLICATE);
   // Clamp to +-cap and offset by cap: round to 8 bits around 128 (saturating), then a table.
-  buf.log.convertTo(buf.shifted, CV_8U, 1.0, 128.0);
+  log.convertTo(shifted, CV_8U, 1.0, 128.0);
   std::uint8_t table[256];
   for (int v = 0; v < 256; ++v) table[v] = static_cast<std::uint8_t>(std::clamp(v - 128, -cap, cap) + cap);
-  cv::LUT(buf.shifted, cv::Mat(1, 256, CV_8U, table), out);
+  cv::LUT(shifted, cv::Mat(1, 256, CV_8U, table), out);
+}
+
+// Interest operator: matching along rows needs structure along the rows, so the measure is the
+// window's mean horizontal change of the LoG image, |LoG(x + 1) - LoG(x - 1)|: zero in uniform
+// areas and along horizontal edges (where every disparity fits), large on texture. The window's
+// sum (16-bit, exact) is compared with threshold x area. Temporaries in scratch[0..2].
+void TextureMaskInto(const cv::Mat& log, const StereoOptions& o, cv::Mat* scratch, cv::Mat& textured) {
+  cv::Mat &gradient = scratch[0], &magnitude = scratch[1], &window_sum = scratch[2];
+  cv::Sobel(log, gradient, CV_16S, 1, 0, 1, 1.0, 0.0, cv::BORDER_REPLICATE);
+  cv::convertScaleAbs(gradient, magnitude);
+  cv::boxFilter(magnitude, window_sum, CV_16U, cv::Size(o.block_width, o.block_height), cv::Point(-1, -1), false,
+                cv::BORDER_REPLICATE);
+  cv::compare(window_sum, std::ceil(o.texture_threshold * o.block_width * o.block_height - 1e-9), textured,
+              cv::CMP_GE);
+}
+
+// The coarse level's disparity range: half the fine one's, rounded outwards.
+int HalfMin(const StereoOptions& o) { return static_cast<int>(std::floor(o.min_disparity / 2.0)); }
+int HalfCount(const StereoOptions& o) {
+  return static_cast<int>(std::ceil((o.min_disparity + o.num_disparities - 1) / 2.0)) - HalfMin(o) + 1;
 }
 
 }  // namespace
 
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap) {
-  PrefilterBuffers buf;
-  cv::Mat out;
-  LogPrefilterInto(grey, sigma_px, gain, cap, buf, out);
+  cv::Mat scratch[4], out;
+  LogPrefilterInto(grey, sigma_px, gain, cap, scratch, out);
   return out;
 }
 
@@ -156,31 +171,29 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
                        i == 0 ? buf.scratch_left : buf.scratch_right, i == 0 ? buf.left : buf.right);
     }
   });
-  // Interest operator: matching along rows needs structure along the rows, so the measure is the
-  // window's mean horizontal change of the LoG image, |LoG(x + 1) - LoG(x - 1)|: zero in uniform
-  // areas and along horizontal edges (where every disparity fits), large on texture. The
-  // window's sum (16-bit, exact) is compared with threshold x area.
-  cv::Sobel(buf.left, buf.gradient, CV_16S, 1, 0, 1, 1.0, 0.0, cv::BORDER_REPLICATE);
-  cv::convertScaleAbs(buf.gradient, buf.magnitude);
-  cv::boxFilter(buf.magnitude, buf.window_sum, CV_16U, cv::Size(o.block_width, o.block_height),
-                cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
-  cv::compare(buf.window_sum, std::ceil(o.texture_threshold * o.block_width * o.block_height - 1e-9),
-              buf.textured, cv::CMP_GE);
-  const int w = left.cols, h = left.rows;
+  TextureMaskInto(buf.left, o, buf.scratch_left, buf.textured);
+  return MatchLevel(buf.left, buf.right, buf.textured, right_offset, d_min, n, level, 0);
+}
+
+const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::Mat& right_log, const cv::Mat& textured,
+                                            int right_offset, int d_min, int n, int level, int first_column) {
+  const StereoOptions& o = options_;
+  LevelBuffers& buf = ws_->levels[level];
+  const int w = left_log.cols, h = left_log.rows;
   cv::Mat& out = buf.out;
   out.create(h, w, CV_32F);
   out.setTo(cv::Scalar(kInvalidDisparity));
 
   const internal::SadKernel& kernel = internal::BestSadKernel();
   internal::SadKernelInput in;
-  in.left = buf.left.ptr<std::uint8_t>();
-  in.left_step = buf.left.step;
-  in.right = buf.right.ptr<std::uint8_t>();
-  in.right_step = buf.right.step;
-  in.right_width = right.cols;
+  in.left = left_log.ptr<std::uint8_t>();
+  in.left_step = left_log.step;
+  in.right = right_log.ptr<std::uint8_t>();
+  in.right_step = right_log.step;
+  in.right_width = right_log.cols;
   in.right_offset = right_offset;
-  in.textured = buf.textured.ptr<std::uint8_t>();
-  in.textured_step = buf.textured.step;
+  in.textured = textured.ptr<std::uint8_t>();
+  in.textured_step = textured.step;
   in.out = out.ptr<float>();
   in.out_step = out.step / sizeof(float);
   in.width = w;
@@ -189,8 +202,8 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
   in.n_padded = (n + kernel.lanes - 1) / kernel.lanes * kernel.lanes;
   in.rw = o.block_width / 2;
   in.rh = o.block_height / 2;
-  const ColumnRange columns = MatchableColumns(w, right.cols, right_offset, d_min, n, o.block_width);
-  in.x_lo = columns.lo;
+  const ColumnRange columns = MatchableColumns(w, right_log.cols, right_offset, d_min, n, o.block_width);
+  in.x_lo = std::max(columns.lo, first_column);
   in.x_hi = columns.hi;
   const int d_max = d_min + n - 1;
   in.pad = std::max(std::abs(d_min), std::abs(d_max)) + in.n_padded + in.rw + 2;
@@ -206,7 +219,7 @@ const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat
   cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
     for (int s = r.start; s < r.end; ++s) {
       const int a = y_lo + (y_hi - y_lo) * s / stripes, b = y_lo + (y_hi - y_lo) * (s + 1) / stripes;
-      if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, right.cols, in.n_padded, in.pad));
+      if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, right_log.cols, in.n_padded, in.pad));
     }
   });
   return out;
@@ -233,12 +246,10 @@ cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_i
   cv::Mat fine = ComputeLevel(left, right, right_offset, o.min_disparity, o.num_disparities, 0).clone();
   // Coarse level: half resolution, half the disparities, the same window (twice the area). An
   // odd offset loses the right image's first column, so that the halves stay aligned.
-  const int d_min_half = static_cast<int>(std::floor(o.min_disparity / 2.0));
-  const int d_max_half = static_cast<int>(std::ceil((o.min_disparity + o.num_disparities - 1) / 2.0));
   const cv::Mat right_even = right.colRange(right_offset % 2, right.cols);
   const int offset_half = right_offset / 2;
-  const ColumnRange coarse_columns = MatchableColumns(left.cols / 2, right_even.cols / 2, offset_half, d_min_half,
-                                                      d_max_half - d_min_half + 1, o.block_width);
+  const ColumnRange coarse_columns =
+      MatchableColumns(left.cols / 2, right_even.cols / 2, offset_half, HalfMin(o), HalfCount(o), o.block_width);
   if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width || left.rows / 2 <= o.block_height) {
     return fine;
   }
@@ -246,8 +257,12 @@ cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_i
   cv::Mat& right_half = ws_->right_half;
   cv::pyrDown(left, left_half);
   cv::pyrDown(right_even, right_half);
-  const cv::Mat& coarse =
-      ComputeLevel(left_half, right_half, offset_half, d_min_half, d_max_half - d_min_half + 1, 1);
+  FillFromCoarse(ComputeLevel(left_half, right_half, offset_half, HalfMin(o), HalfCount(o), 1), 0, fine);
+  return fine;
+}
+
+void SadStereoMatcher::FillFromCoarse(const cv::Mat& coarse, int first_column, cv::Mat& fine) const {
+  const StereoOptions& o = options_;
   const float d_lo = static_cast<float>(o.min_disparity);
   const float d_hi = static_cast<float>(o.min_disparity + o.num_disparities - 1);
   cv::parallel_for_(cv::Range(0, fine.rows), [&](const cv::Range& rows) {
@@ -255,13 +270,67 @@ cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_i
       float* f = fine.ptr<float>(y);
       const float* c = coarse.ptr<float>(std::min(y / 2, coarse.rows - 1));
       const int last = coarse.cols - 1;
-      for (int x = 0; x < fine.cols; ++x) {
+      for (int x = first_column; x < fine.cols; ++x) {
         if (f[x] != kInvalidDisparity) continue;
         const float d = 2.0f * c[std::min(x >> 1, last)];
         if (d >= d_lo && d <= d_hi) f[x] = d;  // false for the invalid +inf
       }
     }
   });
+}
+
+void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view) const {
+  const StereoOptions& o = options_;
+  const cv::Mat grey = ToGrey(image, "prepared");
+  LogPrefilterInto(grey, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[0]);
+  TextureMaskInto(view->log[0], o, view->scratch, view->textured[0]);
+  if (!o.two_levels) {
+    view->log[1].release();
+    view->textured[1].release();
+    return;
+  }
+  cv::pyrDown(grey, view->scratch[4]);
+  LogPrefilterInto(view->scratch[4], o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[1]);
+  TextureMaskInto(view->log[1], o, view->scratch, view->textured[1]);
+}
+
+void SadStereoMatcher::Mirror(const PreparedView& view, PreparedView* mirrored) {
+  for (int level = 0; level < 2; ++level) {
+    if (view.log[level].empty()) {
+      mirrored->log[level].release();
+      mirrored->textured[level].release();
+      continue;
+    }
+    cv::flip(view.log[level], mirrored->log[level], 1);
+    cv::flip(view.textured[level], mirrored->textured[level], 1);
+  }
+}
+
+cv::Mat SadStereoMatcher::Compute(const PreparedView& left, const PreparedView& right, int first_column) {
+  const StereoOptions& o = options_;
+  if (left.log[0].empty() || right.log[0].empty() || left.log[0].size() != right.log[0].size() ||
+      left.log[1].empty() == o.two_levels || right.log[1].empty() == o.two_levels) {
+    throw Error("stereo: the prepared views must be of one size and prepared with these options");
+  }
+  const int w = left.log[0].cols;
+  if (first_column < 0 || first_column >= w) {
+    throw Error(Str("stereo: first_column = ", first_column, ": violated constraint 0..", w - 1));
+  }
+  const ColumnRange fine_columns = MatchableColumns(w, w, 0, o.min_disparity, o.num_disparities, o.block_width);
+  if (fine_columns.hi <= fine_columns.lo || left.log[0].rows <= o.block_height) {
+    throw Error(Str("stereo: a ", w, "x", left.log[0].rows, " image is too small for ", o.num_disparities,
+                    " disparities from ", o.min_disparity, " with a ", o.block_width, "x", o.block_height, " block"));
+  }
+  cv::Mat fine = MatchLevel(left.log[0], right.log[0], left.textured[0], 0, o.min_disparity, o.num_disparities, 0,
+                            first_column)
+                     .clone();
+  const ColumnRange coarse_columns = MatchableColumns(w / 2, w / 2, 0, HalfMin(o), HalfCount(o), o.block_width);
+  if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width || left.log[0].rows / 2 <= o.block_height) {
+    return fine;
+  }
+  FillFromCoarse(MatchLevel(left.log[1], right.log[1], left.textured[1], 0, HalfMin(o), HalfCount(o), 1,
+                            first_column / 2),
+                 first_column, fine);
   return fine;
 }
 

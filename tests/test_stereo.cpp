@@ -1,6 +1,6 @@
-// Tests of the stereo matcher: exact answers on shifted textures, the interest operator, options
-// that must be refused, the temporal filter, disparity files, and accuracy on real data —
-// Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the real KITTI
+// Tests of the stereo matcher: exact answers on shifted textures, prepared views, the interest
+// operator, options that must be refused, the temporal filter, disparity files, and accuracy on
+// real data — Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the real KITTI
 // road pair's road disparity.
 #include <cmath>
 #include <cstdio>
@@ -107,6 +107,65 @@ void TestWiderRight() {
   }
   CHECK_THROWS_WITH(matcher.Compute(big.colRange(0, 340), right.colRange(0, 330)), dps::Error, "at least its columns");
   CHECK_THROWS_WITH(matcher.Compute(big.colRange(0, 340), right, 81), dps::Error, "right_offset = 81");
+}
+
+// Prepared views (prefiltered once, matched several times) on the real tsukuba pair: the same
+// disparities as matching the images; from a first column on, the columns before invalid and the
+// rest as in the whole match (but for the left-right check next to it); mirrored, the right view
+// as the reference, as matching the images turned left to right (the half-resolution grid of a
+// mirrored view lies one pixel over, so the coarse fill may differ there).
+void TestPreparedViews() {
+  const std::string dir = kReal + "/middlebury/tsukuba/";
+  const cv::Mat l = cv::imread(dir + "im3.png", cv::IMREAD_GRAYSCALE);
+  const cv::Mat r = cv::imread(dir + "im4.png", cv::IMREAD_GRAYSCALE);
+  CHECK(!l.empty() && !r.empty());
+  if (l.empty() || r.empty()) return;
+  dps::StereoOptions o;
+  o.num_disparities = 16;
+  dps::SadStereoMatcher matcher(o);
+  dps::SadStereoMatcher::PreparedView pl, pr, ml, mr;
+  matcher.Prepare(l, &pl);
+  matcher.Prepare(r, &pr);
+  const cv::Mat whole = matcher.Compute(l, r);
+  CHECK_EQ(cv::countNonZero(matcher.Compute(pl, pr) != whole), 0);
+
+  const int first = 150;
+  const cv::Mat part = matcher.Compute(pl, pr, first);
+  CHECK_EQ(cv::countNonZero(part.colRange(0, first) != dps::kInvalidDisparity), 0);
+  const cv::Mat inner = part.colRange(first + 16, l.cols), whole_inner = whole.colRange(first + 16, l.cols);
+  const int same = inner.rows * inner.cols - cv::countNonZero(inner != whole_inner);
+  std::printf("prepared views from column %d: %.4f of the pixels 16 columns on as in the whole match\n", first,
+              same / static_cast<double>(inner.rows * inner.cols));
+  CHECK(same >= 0.995 * inner.rows * inner.cols);
+
+  dps::SadStereoMatcher::Mirror(pr, &mr);
+  dps::SadStereoMatcher::Mirror(pl, &ml);
+  cv::Mat fr, fl, mirrored_images, mirrored_prepared;
+  cv::flip(r, fr, 1);
+  cv::flip(l, fl, 1);
+  cv::flip(matcher.Compute(fr, fl), mirrored_images, 1);
+  cv::flip(matcher.Compute(mr, ml), mirrored_prepared, 1);
+  int both = 0, agree = 0;
+  for (int y = 0; y < l.rows; ++y) {
+    for (int x = 0; x < l.cols; ++x) {
+      const float a = mirrored_images.at<float>(y, x), b = mirrored_prepared.at<float>(y, x);
+      if (!std::isfinite(a) || !std::isfinite(b)) continue;
+      ++both;
+      agree += std::abs(a - b) <= 1.0f;
+    }
+  }
+  std::printf("mirrored prepared views: %d pixels valid in both, %.4f within 1 px of matching the turned images\n",
+              both, agree / static_cast<double>(std::max(both, 1)));
+  CHECK(both > 0.5 * l.rows * l.cols);
+  CHECK(agree >= 0.98 * both);
+
+  dps::SadStereoMatcher::PreparedView small;
+  matcher.Prepare(l.colRange(0, 200), &small);
+  CHECK_THROWS_WITH(matcher.Compute(pl, small), dps::Error, "of one size");
+  CHECK_THROWS_WITH(matcher.Compute(pl, pr, l.cols), dps::Error, "first_column");
+  dps::StereoOptions one = o;
+  one.two_levels = false;
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(one).Compute(pl, pr), dps::Error, "prepared with these options");
 }
 
 // The kernel is built for the baseline instruction set and (on x86-64) for AVX2; both must give
@@ -321,6 +380,7 @@ void TestKittiRoad() {
 int main() {
   TestShifts();
   TestWiderRight();
+  TestPreparedViews();
   TestKernelsAgree();
   TestInterestOperator();
   TestBadOptions();

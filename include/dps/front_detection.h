@@ -103,9 +103,9 @@ enum class FrontReference { kLeftView, kRightView };
 // reference_overlap_m of it (an object near the line, put beyond it by matching noise); a right
 // view component that close to a left view detection joins it. Each reference is matched over
 // the columns that can show its objects (the left view from an eighth of the view before its
-// centre, the right view up to 16 columns past its centre), so the two cost less than twice one
-// matching; their first d_max columns, which the other view cannot match, show only the other
-// reference's objects.
+// centre, the right view up to 16 columns past its centre), with both views prefiltered once for
+// the two, so the two cost less than twice one matching; their first d_max columns, which the
+// other view cannot match, show only the other reference's objects.
 class FrontDetector {
  public:
   // Builds both views and the road disparity image for the rig's "left" and "right" cameras.
@@ -143,6 +143,7 @@ class FrontDetector {
     std::unique_ptr<TemporalConsistencyFilter> temporal;
     int first = 0;                              // its first matched column (mirrored for the right view)
     std::unique_ptr<SadStereoMatcher> matcher;  // one per reference: the two run concurrently
+    SadStereoMatcher::PreparedView mirrored_reference, mirrored_other;  // the right view's, mirrored
     std::vector<Detection> found;               // this frame's components on its side
     std::vector<Detection> beyond;              // the left view's wholly beyond the left camera
   };
@@ -152,7 +153,7 @@ class FrontDetector {
   void Prepare(const cv::Mat& own_car, Reference* ref) const;
   // Matches the pair with `ref` as reference over its columns, finds the components and keeps
   // those on its side in ref.found (the left view's wholly beyond the left camera in ref.beyond).
-  void DetectWith(Reference& ref, const cv::Mat& left_view, const cv::Mat& right_view, FrontMatch* m);
+  void DetectWith(Reference& ref, FrontMatch* m);
   // The ground point of a reference view's column x at disparity d (eq. 16).
   bool ColumnToGround(const VirtualView& view, double x, double disparity, Eigen::Vector2d* ground) const;
   // Whether pixel (x, y) votes for component `label`: a scored disparity in one of its bins.
@@ -172,6 +173,8 @@ class FrontDetector {
   int frames_ = 0;
   double baseline_m_ = 0.0;
   Reference by_left_, by_right_;
+  // This frame's views prefiltered for matching (RenderViews), shared by the two references.
+  SadStereoMatcher::PreparedView left_prepared_, right_prepared_;
   Eigen::Vector2d left_camera_{0, 0}, across_{1, 0};  // the left camera and the baseline's direction (ground)
 };
 

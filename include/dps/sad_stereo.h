@@ -78,12 +78,37 @@ class SadStereoMatcher {
   // window at the edges.
   cv::Mat Compute(const cv::Mat& left, const cv::Mat& right, int right_offset = 0);
 
+  // A view prefiltered for matching (steps 1 and 3's interest operator, at each level), for a
+  // view matched more than once: prepared once, matched with either view as the reference and
+  // mirrored for matching right-to-left, instead of prefiltering it again for every matching.
+  struct PreparedView {
+    cv::Mat log[2];       // the LoG image, full and (two levels) half resolution
+    cv::Mat textured[2];  // the interest operator's mask (255: textured window)
+    cv::Mat scratch[5];   // working memory, kept between calls
+  };
+  // Prefilters a grey or BGR image into `view` (its buffers reused). Const: concurrent calls on
+  // one matcher are safe.
+  void Prepare(const cv::Mat& image, PreparedView* view) const;
+  // `view` turned left to right (the pair then matches the other way round).
+  static void Mirror(const PreparedView& view, PreparedView* mirrored);
+  // Disparity of the prepared `left` against the prepared `right` (the same size, both prepared by
+  // a matcher with these options) for the left view's columns from first_column on, the others
+  // invalid; the windows and the search still read the columns before it. Without first_column,
+  // as Compute of the two images.
+  cv::Mat Compute(const PreparedView& left, const PreparedView& right, int first_column = 0);
+
   const StereoOptions& options() const { return options_; }
 
  private:
   struct Workspace;
+  // One level: both images prefiltered, then matched.
   const cv::Mat& ComputeLevel(const cv::Mat& left_grey, const cv::Mat& right_grey, int right_offset,
                               int min_disparity, int num_disparities, int level);
+  // One level of prefiltered images, the left view's columns from first_column on.
+  const cv::Mat& MatchLevel(const cv::Mat& left_log, const cv::Mat& right_log, const cv::Mat& textured,
+                            int right_offset, int min_disparity, int num_disparities, int level, int first_column);
+  // Fills the fine level's invalid pixels from first_column on with twice the coarse disparity.
+  void FillFromCoarse(const cv::Mat& coarse, int first_column, cv::Mat& fine) const;
   StereoOptions options_;
   std::unique_ptr<Workspace> ws_;
 };
