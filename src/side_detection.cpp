@@ -162,8 +162,10 @@ const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view
 }
 
 SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
-                                const PlanarPose& current_in_previous, double interval_s) {
+                                const PlanarPose& current_in_previous, double interval_s, bool continuing) {
   SideResult r;
+  const bool had_last = last_valid_;
+  last_valid_ = false;  // until this call has matched
   // The camera's displacement, in the previous frame's vehicle frame.
   const Pose rel = current_in_previous.ToPose3();
   const Eigen::Vector3d t = camera_.vehicle_from_camera.t;
@@ -185,8 +187,13 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   r.view_scale = sixteenths / 16.0;
   SideViewCache& views = Views(sixteenths);
   const VirtualView& previous_view = views.Get(sign * alpha);
-  const cv::Mat previous = previous_view.Render(GreyImage(previous_omni));
+  const std::pair<int, long> previous_key{sixteenths, views.Key(sign * alpha)};
+  // The last call's current view, when it is this call's previous one.
+  const bool reuse = continuing && had_last && last_key_ == previous_key;
+  views_reused_ += reuse;
+  const cv::Mat previous = reuse ? last_view_ : previous_view.Render(GreyImage(previous_omni));
   const VirtualView& current_view = views.Get(sign * (alpha - current_in_previous.heading_rad));
+  const std::pair<int, long> current_key{sixteenths, views.Key(sign * (alpha - current_in_previous.heading_rad))};
   const cv::Mat current = current_view.Render(GreyImage(current_omni));
   // The current frame is the reference, so that moving objects are placed where they are now.
   // The camera moves along -x of a right view: static things move right from the previous to the
@@ -197,17 +204,27 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   r.reference_view = current;
   r.other_view = previous;
   const ViewSpec& spec = reference.spec();
-  const ViewGeometry& geometry =
-      Geometry(reference, {sixteenths, views.Key(sign * (alpha - current_in_previous.heading_rad))});
+  const ViewGeometry& geometry = Geometry(reference, current_key);
   const cv::Mat& ignore = geometry.ignore;
-  if (side_ == Side::kLeft) {
-    cv::Mat current_mirrored, previous_mirrored;
-    cv::flip(current, current_mirrored, 1);
-    cv::flip(previous, previous_mirrored, 1);
-    cv::flip(matcher_->Compute(current_mirrored, previous_mirrored), r.disparity, 1);
-  } else {
-    r.disparity = matcher_->Compute(current, previous);
-  }
+  // Both views prefiltered as matched (mirrored for the left side); the current one is kept for
+  // the next call.
+  const auto prepare = [&](const cv::Mat& view, SadStereoMatcher::PreparedView* prepared) {
+    if (side_ == Side::kLeft) {
+      cv::Mat mirrored;
+      cv::flip(view, mirrored, 1);
+      matcher_->Prepare(mirrored, prepared);
+    } else {
+      matcher_->Prepare(view, prepared);
+    }
+  };
+  if (!reuse) prepare(previous, &last_prepared_);
+  prepare(current, &prepared_);
+  r.disparity = matcher_->Compute(prepared_, last_prepared_);
+  if (side_ == Side::kLeft) cv::flip(r.disparity, r.disparity, 1);
+  std::swap(last_prepared_, prepared_);
+  last_view_ = current;
+  last_key_ = current_key;
+  last_valid_ = true;
   r.disparity.setTo(kInvalidDisparity, ignore);
   // The road's disparity: f B / depth of the ground point along the view axis.
   cv::Mat road = geometry.inverse_depth * (spec.focal_px * r.baseline_m);

@@ -1,7 +1,8 @@
 // Side obstacles by motion stereo (section V-B) on rendered frame pairs with known truth: a car
 // parked beside the road at 8 m/s and 15 fps (its disparity at full view size would exceed the
 // range, so the views shrink), a car overtaking on the left (placed where it is in the
-// current frame, not where it was in the previous one), and a car keeping pace on the right.
+// current frame, not where it was in the previous one), a car keeping pace on the right, and
+// consecutive frames taking the last frame's view instead of rendering it again.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -155,11 +156,60 @@ void TestPacingRight() {
   CHECK_NEAR(d.range_m, truth_range, kRangeTolFraction * truth_range);
 }
 
+// Consecutive frames (`continuing`): the previous view is the last call's current view, taken
+// as it was when the views are the same, with the same result as rendering and prefiltering it
+// again; not when the call does not continue the last one, nor when the view turned.
+void TestContinuing() {
+  for (const dps::Side side : {dps::Side::kRight, dps::Side::kLeft}) {
+    const std::string camera = side == dps::Side::kRight ? "right" : "left";
+    dps::SceneObject car;
+    car.start.x_m = side == dps::Side::kRight ? 3.4 : -3.4;
+    car.start.z_m = 3.0;
+    car.colour = 2;
+    dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
+    dps::ResizeScene(&scene, 320, 240);
+    scene.render.supersample = 1;
+    scene.objects = {car};
+    const dps::SceneRenderer renderer(scene);
+    const size_t index = side == dps::Side::kRight ? 1 : 0;
+    CHECK_EQ(scene.rig.cameras[index].name, camera);
+    std::vector<cv::Mat> images;
+    for (int f = 0; f < 3; ++f) images.push_back(renderer.Render(renderer.StateAt(scene.FrameTime(f)), index, f).image);
+    const dps::PlanarPose step = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(0), scene.FrameTime(1));
+    const double dt = scene.FrameTime(1) - scene.FrameTime(0);
+    const dps::SideDetectorOptions options = dps::DefaultPipelineOptions(scene.rig).side;
+
+    dps::SideDetector going_on(scene.rig, camera, side, options), fresh(scene.rig, camera, side, options);
+    going_on.Detect(images[0], images[1], step, dt);
+    const dps::SideResult reused = going_on.Detect(images[1], images[2], step, dt, true);
+    const dps::SideResult anew = fresh.Detect(images[1], images[2], step, dt);
+    const int differ = cv::countNonZero(reused.disparity != anew.disparity);  // inf == inf
+    std::printf("continuing, %s camera: views reused %zu, %d pixel(s) differ, %zu / %zu detection(s)\n",
+                camera.c_str(), going_on.views_reused(), differ, reused.detections.size(), anew.detections.size());
+    CHECK_EQ(going_on.views_reused(), size_t{1});
+    CHECK_EQ(differ, 0);
+    CHECK_EQ(cv::countNonZero(reused.other_view != anew.other_view), 0);
+    CHECK(!anew.detections.empty());
+    CHECK_EQ(reused.detections.size(), anew.detections.size());
+    for (size_t i = 0; i < std::min(reused.detections.size(), anew.detections.size()); ++i) {
+      CHECK_EQ(reused.detections[i].x_m, anew.detections[i].x_m);
+      CHECK_EQ(reused.detections[i].z_m, anew.detections[i].z_m);
+    }
+    // Not continuing: rendered again. Turned by 3 degrees: another view, rendered again.
+    going_on.Detect(images[1], images[2], step, dt);
+    dps::PlanarPose turned = step;
+    turned.heading_rad += 0.05;
+    going_on.Detect(images[1], images[2], turned, dt, true);
+    CHECK_EQ(going_on.views_reused(), size_t{1});
+  }
+}
+
 }  // namespace
 
 int main() {
   TestParkedBeside();
   TestOvertakingLeft();
   TestPacingRight();
+  TestContinuing();
   return dps_test::Report();
 }

@@ -109,8 +109,12 @@ class SideDetector {
   // velocity along the camera's displacement (Detection::has_motion): a rigid object has depth x
   // disparity = f x (the camera's displacement relative to it) in every column, so its own
   // displacement is the camera's minus the median of depth x disparity / f.
+  // `continuing`: previous_omni is the current_omni of the last call (consecutive frames); the
+  // previous view is then the last call's current view whenever the two views are the same (same
+  // scale and yaw, e.g. driving straight), and is taken as it was rendered and prefiltered then.
   SideResult Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
-                    const PlanarPose& current_in_previous, double interval_s = 0.0);
+                    const PlanarPose& current_in_previous, double interval_s = 0.0, bool continuing = false);
+  size_t views_reused() const { return views_reused_; }  // calls that took the last current view
 
  private:
   RigCamera camera_;
@@ -129,6 +133,14 @@ class SideDetector {
   std::map<std::pair<int, long>, ViewGeometry> geometry_;   // by (scale, yaw grid index)
   std::map<int, std::unique_ptr<SideViewCache>> views_;     // by scale
   std::unique_ptr<SadStereoMatcher> matcher_;
+  // The last call's current view as matched (rendered; prefiltered, mirrored for the left side)
+  // and its (scale, yaw grid index); valid only after a call that matched. `prepared_` is the
+  // current view's buffer of the next call.
+  cv::Mat last_view_;
+  SadStereoMatcher::PreparedView last_prepared_, prepared_;
+  std::pair<int, long> last_key_{0, 0};
+  bool last_valid_ = false;
+  size_t views_reused_ = 0;
 };
 
 }  // namespace dps

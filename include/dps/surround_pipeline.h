@@ -84,6 +84,7 @@ class SurroundPipeline {
   std::unique_ptr<SideDetector> left_, right_;
   cv::Mat previous_left_, previous_right_;  // the previous frame's omni images, grey
   double previous_t_s_ = 0.0;
+  bool sides_last_ = false;  // the side detectors ran on the previous frame (Detect's `continuing`)
 };
 
 }  // namespace dps
