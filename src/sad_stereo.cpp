@@ -325,7 +325,8 @@ cv::Mat SadStereoMatcher::Compute(const PreparedView& left, const PreparedView& 
                             first_column)
                      .clone();
   const ColumnRange coarse_columns = MatchableColumns(w / 2, w / 2, 0, HalfMin(o), HalfCount(o), o.block_width);
-  if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width || left.log[0].rows / 2 <= o.block_height) {
+  if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width ||
+      left.log[0].rows / 2 <= o.block_height) {
     return fine;
   }
   FillFromCoarse(MatchLevel(left.log[1], right.log[1], left.textured[1], 0, HalfMin(o), HalfCount(o), 1,

@@ -125,8 +125,12 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
         try {
           if (task == kFront) front_->MatchReference(FrontReference::kLeftView, &out.front);
           if (task == kFrontRight) front_->MatchReference(FrontReference::kRightView, &out.front);
-          if (task == kLeft) out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, sides_last_);
-          if (task == kRight) out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, sides_last_);
+          if (task == kLeft) {
+            out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, sides_last_);
+          }
+          if (task == kRight) {
+            out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, sides_last_);
+          }
           if (task >= kAlongside) alongside[task - kAlongside]();
         } catch (...) {
           failure[task] = std::current_exception();

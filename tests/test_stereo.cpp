@@ -1,7 +1,7 @@
 // Tests of the stereo matcher: exact answers on shifted textures, prepared views, the interest
 // operator, options that must be refused, the temporal filter, disparity files, and accuracy on
-// real data — Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the real KITTI
-// road pair's road disparity.
+// real data — Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the
+// real KITTI road pair's road disparity.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
