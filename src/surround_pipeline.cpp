@@ -84,6 +84,10 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
   const auto t0 = now();
   // The first frame has nothing to compare the side views with.
   const bool sides = options_.sides && !previous_left_.empty() && in.motion_known;
+  // The side detectors' last frame is the previous one only if that frame went through (an
+  // exception leaves previous_left_ as it was).
+  const bool continuing = sides_last_;
+  sides_last_ = false;
   if (options_.sides && !previous_left_.empty() && !in.motion_known) {
     out.warnings.push_back(Str("frame ", in.frame, ": no known motion (CAN); side detection skipped"));
   }
@@ -126,10 +130,10 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
           if (task == kFront) front_->MatchReference(FrontReference::kLeftView, &out.front);
           if (task == kFrontRight) front_->MatchReference(FrontReference::kRightView, &out.front);
           if (task == kLeft) {
-            out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, sides_last_);
+            out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, continuing);
           }
           if (task == kRight) {
-            out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, sides_last_);
+            out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, continuing);
           }
           if (task >= kAlongside) alongside[task - kAlongside]();
         } catch (...) {
