@@ -139,6 +139,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     }
     const bool png = o.map_png || (o.map_video && !video.isOpened());
     const cv::Mat map_background = DrawMapBackground(rig.vehicle, pipeline.coverage(), o.map);
+    cv::Mat map;  // the frame's map picture, drawn into the same buffer every frame
     cv::VideoWriter diagnostics;
     const std::string diagnostics_tmp = (tmp / ".diagnostics.tmp.avi").string();
     if (png) fs::create_directories(tmp / "map");
@@ -154,8 +155,9 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
                     out.detections.size());
       grid.Update(ego, pipeline.coverage(), out.detections);
       // The picture only when it is written (--no-video without PNGs: the CSVs alone).
-      cv::Mat map;
-      if (video.isOpened() || png) map = DrawFrameMap(map_background, grid, rig.vehicle, out.detections, frame_tracks, o.map, caption);
+      if (video.isOpened() || png) {
+        DrawFrameMap(map_background, grid, rig.vehicle, out.detections, frame_tracks, o.map, caption, map);
+      }
       for (const TrackState& t : frame_tracks) {
         if (t.confirmed) tracks.push_back(t);
       }

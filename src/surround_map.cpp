@@ -126,12 +126,19 @@ void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOp
 cv::Mat DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
                      const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
                      const MapOptions& options, const std::string& caption) {
-  cv::Mat map = background.clone();
+  cv::Mat map;
+  DrawFrameMap(background, grid, vehicle, detections, tracks, options, caption, map);
+  return map;
+}
+
+void DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
+                  const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
+                  const MapOptions& options, const std::string& caption, cv::Mat& map) {
+  background.copyTo(map);
   grid.Draw(map, options.range_m);
   DrawOwnCar(map, vehicle, options);
   DrawObstacles(map, detections, options, caption);
   DrawTracks(map, tracks, options);
-  return map;
 }
 
 namespace {

@@ -2,6 +2,7 @@
 // occupancy grid land where the vehicle-frame geometry puts them. Map pixel of vehicle (x, z):
 // u = size/2 + x * scale, v = size/2 - z * scale, scale = size / (2 range) px per metre.
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
@@ -107,6 +108,13 @@ void TestTracksAndGrid() {
   CHECK(std::abs(at_wall[0] - at_wall[1]) <= 10 && std::abs(at_wall[1] - at_wall[2]) <= 10);
   CHECK(before[1] > before[0] && before[1] > before[2]);
   CHECK_EQ(Count(framed, Pixel(0, 0), 8, Black), 17 * 17);
+
+  // Drawn into a picture of the right size, the same map in the same buffer (whatever it held).
+  cv::Mat reused(background.size(), background.type(), cv::Scalar(1, 2, 3));
+  const std::uint8_t* buffer = reused.data;
+  dps::DrawFrameMap(background, grid, car, {}, {}, kMap, "grid", reused);
+  CHECK(reused.data == buffer);
+  CHECK_EQ(cv::norm(reused, framed, cv::NORM_INF), 0.0);
 }
 
 }  // namespace
