@@ -204,10 +204,9 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
   // What the left view saw wholly beyond the left camera, where the right view found nothing
   // (an object near that line whose parts the matching noise put on either side).
   for (const Detection& e : by_left_.beyond) {
-    bool covered = false;
-    for (const Detection& d : by_right_.found) {
-      covered = covered || FuseDetections({e, d}, options_.reference_overlap_m).size() == 1;
-    }
+    const bool covered = std::any_of(by_right_.found.begin(), by_right_.found.end(), [&](const Detection& d) {
+      return FuseDetections({e, d}, options_.reference_overlap_m).size() == 1;
+    });
     if (!covered) r->detections.push_back(e);
   }
   for (size_t i = 0; i < r->detections.size(); ++i) r->detections[i].id = static_cast<int>(i);

@@ -28,14 +28,22 @@ cv::Mat ToGrey(const cv::Mat& image, const char* which) {
   return grey;
 }
 
-// The left columns (inclusive) where the window of every disparity lies inside both images.
+// The columns (inclusive) where the window of every disparity lies inside both images.
 struct ColumnRange {
   int lo = 0, hi = -1;
 };
-ColumnRange MatchableColumns(int left_width, int right_width, int right_offset, int d_min, int n, int block_width) {
+ColumnRange MatchableColumns(int width, int d_min, int n, int block_width) {
   const int rw = block_width / 2, d_max = d_min + n - 1;
-  return {rw + std::max(0, d_max - right_offset),
-          std::min(left_width - 1 - rw, right_width - 1 - rw - right_offset + d_min)};
+  return {rw + std::max(0, d_max), std::min(width - 1 - rw, width - 1 - rw + d_min)};
+}
+
+// Throws dps::Error unless a width x height image leaves columns to match.
+void RequireMatchable(int width, int height, const StereoOptions& o) {
+  const ColumnRange columns = MatchableColumns(width, o.min_disparity, o.num_disparities, o.block_width);
+  if (columns.hi <= columns.lo || height <= o.block_height) {
+    throw Error(Str("stereo: a ", width, "x", height, " image is too small for ", o.num_disparities,
+                    " disparities from ", o.min_disparity, " with a ", o.block_width, "x", o.block_height, " block"));
+  }
 }
 
 }  // namespace
@@ -48,13 +56,13 @@ struct StripeBuffers {
   std::vector<int> disp2, best_d;
   std::vector<float> row_disp;
 
-  internal::SadKernelBuffers Prepare(int width, int right_width, int n_padded, int pad) {
+  internal::SadKernelBuffers Prepare(int width, int n_padded, int pad) {
     hsad.resize(static_cast<size_t>(width) * n_padded);
     sad.resize(n_padded);
-    cost2.resize(right_width);
-    padded.resize(static_cast<size_t>(right_width) + 2 * pad);
+    cost2.resize(width);
+    padded.resize(static_cast<size_t>(width) + 2 * pad);
     padded_out.resize(padded.size());
-    disp2.resize(right_width);
+    disp2.resize(width);
     best_d.resize(width);
     row_disp.resize(width);
     return {hsad.data(), sad.data(), cost2.data(), padded.data(), padded_out.data(),
@@ -62,16 +70,15 @@ struct StripeBuffers {
   }
 };
 
-// Everything one pyramid level needs between calls.
+// Everything one pyramid level's matching needs between calls.
 struct LevelBuffers {
-  cv::Mat scratch_left[4], scratch_right[4];  // the prefilter's temporaries
-  cv::Mat left, right, textured, out;
+  cv::Mat out;
   std::vector<StripeBuffers> stripes;
 };
 
 struct SadStereoMatcher::Workspace {
   LevelBuffers levels[2];
-  cv::Mat left_half, right_half;
+  PreparedView left, right;  // Compute of two images prepares them here
 };
 
 namespace internal {
@@ -160,23 +167,8 @@ SadStereoMatcher::SadStereoMatcher(const StereoOptions& options)
 
 SadStereoMatcher::~SadStereoMatcher() = default;
 
-const cv::Mat& SadStereoMatcher::ComputeLevel(const cv::Mat& left, const cv::Mat& right, int right_offset,
-                                              int d_min, int n, int level) {
-  const StereoOptions& o = options_;
-  LevelBuffers& buf = ws_->levels[level];
-  // Both images at once (OpenCV runs the filters inside serially then).
-  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& r) {
-    for (int i = r.start; i < r.end; ++i) {
-      LogPrefilterInto(i == 0 ? left : right, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap,
-                       i == 0 ? buf.scratch_left : buf.scratch_right, i == 0 ? buf.left : buf.right);
-    }
-  });
-  TextureMaskInto(buf.left, o, buf.scratch_left, buf.textured);
-  return MatchLevel(buf.left, buf.right, buf.textured, right_offset, d_min, n, level, 0);
-}
-
 const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::Mat& right_log, const cv::Mat& textured,
-                                            int right_offset, int d_min, int n, int level, int first_column) {
+                                            int d_min, int n, int level, int first_column) {
   const StereoOptions& o = options_;
   LevelBuffers& buf = ws_->levels[level];
   const int w = left_log.cols, h = left_log.rows;
@@ -190,8 +182,6 @@ const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::M
   in.left_step = left_log.step;
   in.right = right_log.ptr<std::uint8_t>();
   in.right_step = right_log.step;
-  in.right_width = right_log.cols;
-  in.right_offset = right_offset;
   in.textured = textured.ptr<std::uint8_t>();
   in.textured_step = textured.step;
   in.out = out.ptr<float>();
@@ -202,7 +192,7 @@ const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::M
   in.n_padded = (n + kernel.lanes - 1) / kernel.lanes * kernel.lanes;
   in.rw = o.block_width / 2;
   in.rh = o.block_height / 2;
-  const ColumnRange columns = MatchableColumns(w, right_log.cols, right_offset, d_min, n, o.block_width);
+  const ColumnRange columns = MatchableColumns(w, d_min, n, o.block_width);
   in.x_lo = std::max(columns.lo, first_column);
   in.x_hi = columns.hi;
   const int d_max = d_min + n - 1;
@@ -219,46 +209,24 @@ const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::M
   cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
     for (int s = r.start; s < r.end; ++s) {
       const int a = y_lo + (y_hi - y_lo) * s / stripes, b = y_lo + (y_hi - y_lo) * (s + 1) / stripes;
-      if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, right_log.cols, in.n_padded, in.pad));
+      if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, in.n_padded, in.pad));
     }
   });
   return out;
 }
 
-cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_in, int right_offset) {
+cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_in) {
   const cv::Mat left = ToGrey(left_in, "left"), right = ToGrey(right_in, "right");
-  if (left.rows != right.rows || right.cols < left.cols) {
-    throw Error(Str("stereo: the right image (", right.cols, "x", right.rows,
-                    ") must have the left's rows and at least its columns (", left.cols, "x", left.rows, ")"));
+  if (left.size() != right.size()) {
+    throw Error(Str("stereo: the right image (", right.cols, "x", right.rows, ") must have the left's rows and columns (",
+                    left.cols, "x", left.rows, ")"));
   }
-  if (right_offset < 0 || right_offset > right.cols - left.cols) {
-    throw Error(Str("stereo: right_offset = ", right_offset, ": violated constraint 0..", right.cols - left.cols,
-                    " (the right image's extra columns)"));
-  }
-  const StereoOptions& o = options_;
-  const ColumnRange fine_columns =
-      MatchableColumns(left.cols, right.cols, right_offset, o.min_disparity, o.num_disparities, o.block_width);
-  if (fine_columns.hi <= fine_columns.lo || left.rows <= o.block_height) {
-    throw Error(Str("stereo: a ", left.cols, "x", left.rows, " image is too small for ",
-                    o.num_disparities, " disparities from ", o.min_disparity, " with a ",
-                    o.block_width, "x", o.block_height, " block"));
-  }
-  cv::Mat fine = ComputeLevel(left, right, right_offset, o.min_disparity, o.num_disparities, 0).clone();
-  // Coarse level: half resolution, half the disparities, the same window (twice the area). An
-  // odd offset loses the right image's first column, so that the halves stay aligned.
-  const cv::Mat right_even = right.colRange(right_offset % 2, right.cols);
-  const int offset_half = right_offset / 2;
-  const ColumnRange coarse_columns =
-      MatchableColumns(left.cols / 2, right_even.cols / 2, offset_half, HalfMin(o), HalfCount(o), o.block_width);
-  if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width || left.rows / 2 <= o.block_height) {
-    return fine;
-  }
-  cv::Mat& left_half = ws_->left_half;
-  cv::Mat& right_half = ws_->right_half;
-  cv::pyrDown(left, left_half);
-  cv::pyrDown(right_even, right_half);
-  FillFromCoarse(ComputeLevel(left_half, right_half, offset_half, HalfMin(o), HalfCount(o), 1), 0, fine);
-  return fine;
+  RequireMatchable(left.cols, left.rows, options_);
+  // Both images prepared at once (OpenCV runs the filters inside serially then).
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& r) {
+    for (int i = r.start; i < r.end; ++i) Prepare(i == 0 ? left : right, i == 0 ? &ws_->left : &ws_->right);
+  });
+  return Compute(ws_->left, ws_->right);
 }
 
 void SadStereoMatcher::FillFromCoarse(const cv::Mat& coarse, int first_column, cv::Mat& fine) const {
@@ -316,20 +284,16 @@ cv::Mat SadStereoMatcher::Compute(const PreparedView& left, const PreparedView& 
   if (first_column < 0 || first_column >= w) {
     throw Error(Str("stereo: first_column = ", first_column, ": violated constraint 0..", w - 1));
   }
-  const ColumnRange fine_columns = MatchableColumns(w, w, 0, o.min_disparity, o.num_disparities, o.block_width);
-  if (fine_columns.hi <= fine_columns.lo || left.log[0].rows <= o.block_height) {
-    throw Error(Str("stereo: a ", w, "x", left.log[0].rows, " image is too small for ", o.num_disparities,
-                    " disparities from ", o.min_disparity, " with a ", o.block_width, "x", o.block_height, " block"));
-  }
-  cv::Mat fine = MatchLevel(left.log[0], right.log[0], left.textured[0], 0, o.min_disparity, o.num_disparities, 0,
-                            first_column)
-                     .clone();
-  const ColumnRange coarse_columns = MatchableColumns(w / 2, w / 2, 0, HalfMin(o), HalfCount(o), o.block_width);
+  RequireMatchable(w, left.log[0].rows, o);
+  cv::Mat fine =
+      MatchLevel(left.log[0], right.log[0], left.textured[0], o.min_disparity, o.num_disparities, 0, first_column).clone();
+  // Coarse level: half resolution, half the disparities, the same window (twice the area).
+  const ColumnRange coarse_columns = MatchableColumns(w / 2, HalfMin(o), HalfCount(o), o.block_width);
   if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width ||
       left.log[0].rows / 2 <= o.block_height) {
     return fine;
   }
-  FillFromCoarse(MatchLevel(left.log[1], right.log[1], left.textured[1], 0, HalfMin(o), HalfCount(o), 1,
+  FillFromCoarse(MatchLevel(left.log[1], right.log[1], left.textured[1], HalfMin(o), HalfCount(o), 1,
                             first_column / 2),
                  first_column, fine);
   return fine;

@@ -16,8 +16,6 @@ struct SadKernelInput {
   std::size_t left_step = 0;               // bytes per row
   const std::uint8_t* right = nullptr;     // prefiltered right
   std::size_t right_step = 0;
-  int right_width = 0;      // the right image may be wider than the left ...
-  int right_offset = 0;     // ... left column x at disparity d matches right column x + offset - d
   const std::uint8_t* textured = nullptr;  // 255 where the interest operator accepts the window
   std::size_t textured_step = 0;
   float* out = nullptr;                    // disparity, rows pre-filled with kInvalidDisparity
@@ -34,8 +32,8 @@ struct SadKernelInput {
   double left_right_max_diff = 1.0;
 };
 
-// Working memory of one stripe of rows (sizes: hsad width * n_padded, sad n_padded, best_d /
-// row_disp width, cost2 / disp2 right_width, padded rows right_width + 2 pad).
+// Working memory of one stripe of rows (sizes: hsad width * n_padded, sad n_padded, cost2 /
+// disp2 / best_d / row_disp width, padded rows width + 2 pad).
 struct SadKernelBuffers {
   std::uint16_t* hsad = nullptr;
   std::uint16_t* sad = nullptr;

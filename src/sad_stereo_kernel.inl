@@ -37,21 +37,20 @@ const std::uint8_t* Row(const std::uint8_t* data, std::size_t step, int y) { ret
 // Copies one right row into `dst` with `pad` replicated columns on each side.
 void PadRow(const SadKernelInput& in, int y, std::uint8_t* dst) {
   const std::uint8_t* src = Row(in.right, in.right_step, y);
-  const int w = in.right_width;
+  const int w = in.width;
   for (int i = 0; i < in.pad; ++i) dst[i] = src[0];
   for (int i = 0; i < w; ++i) dst[in.pad + i] = src[i];
   for (int i = 0; i < in.pad; ++i) dst[in.pad + w + i] = src[w - 1];
 }
 
-// hsad[x][k] += |L(y, x) - R(y, x + offset - d_max + k)| for x in [x0, x1): the column sums of a
-// new row.
+// hsad[x][k] += |L(y, x) - R(y, x - d_max + k)| for x in [x0, x1): the column sums of a new row.
 void AddRow(const SadKernelInput& in, const std::uint8_t* left_row, const std::uint8_t* right_padded,
             int x0, int x1, std::uint16_t* hsad) {
   const int np = in.n_padded;
   const int d_max = in.d_min + in.n - 1;
   for (int x = x0; x < x1; ++x) {
     std::uint16_t* h = hsad + static_cast<std::size_t>(x) * np;
-    const std::uint8_t* r = right_padded + in.pad + in.right_offset + x - d_max;
+    const std::uint8_t* r = right_padded + in.pad + x - d_max;
     const int l = left_row[x];
     int k = 0;
 #if CV_SIMD
@@ -73,8 +72,8 @@ void SlideRows(const SadKernelInput& in, const std::uint8_t* left_in, const std:
   const int d_max = in.d_min + in.n - 1;
   for (int x = x0; x < x1; ++x) {
     std::uint16_t* h = hsad + static_cast<std::size_t>(x) * np;
-    const std::uint8_t* ri = right_in + in.pad + in.right_offset + x - d_max;
-    const std::uint8_t* ro = right_out + in.pad + in.right_offset + x - d_max;
+    const std::uint8_t* ri = right_in + in.pad + x - d_max;
+    const std::uint8_t* ro = right_out + in.pad + x - d_max;
     int k = 0;
 #if CV_SIMD
     const Cost li = cv::vx_setall_u16(left_in[x]), lo = cv::vx_setall_u16(left_out[x]);
@@ -132,10 +131,10 @@ void MatchRows(const SadKernelInput& in, int y0, int y1, const SadKernelBuffers&
                 Row(in.left, in.left_step, y - in.rh - 1), buf.padded_out, xa, xb, hsad);
     }
     for (int x = 0; x < w; ++x) {
+      buf.cost2[x] = kMaxCost;
       buf.row_disp[x] = kInvalid;
       buf.best_d[x] = 0;
     }
-    for (int x = 0; x < in.right_width; ++x) buf.cost2[x] = kMaxCost;
     // Row sums over the first window.
     for (int k = 0; k < np; ++k) sad[k] = 0;
     for (int x = in.x_lo - in.rw; x <= in.x_lo + in.rw; ++x) {
@@ -182,8 +181,8 @@ void MatchRows(const SadKernelInput& in, int y0, int y1, const SadKernelBuffers&
 #endif
       const int d = d_max - k_best;
       // The best match of the right pixel x - d seen from the left (for the left-right check).
-      const int xr = x + in.right_offset - d;
-      if (xr >= 0 && xr < in.right_width && c_best < buf.cost2[xr]) {
+      const int xr = x - d;
+      if (xr >= 0 && xr < w && c_best < buf.cost2[xr]) {
         buf.cost2[xr] = static_cast<std::uint16_t>(c_best);
         buf.disp2[xr] = d;
       }
@@ -228,8 +227,8 @@ void MatchRows(const SadKernelInput& in, int y0, int y1, const SadKernelBuffers&
     for (int x = in.x_lo; x <= in.x_hi; ++x) {
       if (buf.row_disp[x] == kInvalid) continue;
       if (in.left_right_check) {
-        const int xr = x + in.right_offset - buf.best_d[x];
-        if (xr < 0 || xr >= in.right_width || buf.cost2[xr] == kMaxCost ||
+        const int xr = x - buf.best_d[x];
+        if (xr < 0 || xr >= w || buf.cost2[xr] == kMaxCost ||
             Abs(buf.disp2[xr] - buf.best_d[x]) > in.left_right_max_diff) {
           continue;
         }

@@ -67,16 +67,9 @@ class SadStereoMatcher {
   SadStereoMatcher(const SadStereoMatcher&) = delete;
   SadStereoMatcher& operator=(const SadStereoMatcher&) = delete;
 
-  // Disparity of `left` (reference) against `right`: CV_8U or CV_8UC3 (converted to grey), the
-  // same number of rows, at least block size + num_disparities columns. Throws dps::Error for bad
-  // inputs. The left image's first d_max = min_disparity + num_disparities - 1 and last
-  // -min_disparity columns have no disparity when the right image is the same size, since part
-  // of their search falls outside it. A wider right image (a view rendered beyond the left view's
-  // edges) lets them match: left column x then matches right column x + right_offset - d,
-  // 0 <= right_offset <= right.cols - left.cols; with d_max columns before the left view's first
-  // (right_offset = d_max) and -min_disparity after its last, every column matches but half a
-  // window at the edges.
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right, int right_offset = 0);
+  // Disparity of `left` (reference) against `right`: CV_8U or CV_8UC3 (converted to grey), same
+  // size, at least block size + num_disparities wide. Throws dps::Error for bad inputs.
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right);
 
   // A view prefiltered for matching (steps 1 and 3's interest operator, at each level), for a
   // view matched more than once: prepared once, matched with either view as the reference and
@@ -101,12 +94,9 @@ class SadStereoMatcher {
 
  private:
   struct Workspace;
-  // One level: both images prefiltered, then matched.
-  const cv::Mat& ComputeLevel(const cv::Mat& left_grey, const cv::Mat& right_grey, int right_offset,
-                              int min_disparity, int num_disparities, int level);
   // One level of prefiltered images, the left view's columns from first_column on.
   const cv::Mat& MatchLevel(const cv::Mat& left_log, const cv::Mat& right_log, const cv::Mat& textured,
-                            int right_offset, int min_disparity, int num_disparities, int level, int first_column);
+                            int min_disparity, int num_disparities, int level, int first_column);
   // Fills the fine level's invalid pixels from first_column on with twice the coarse disparity.
   void FillFromCoarse(const cv::Mat& coarse, int first_column, cv::Mat& fine) const;
   StereoOptions options_;
