@@ -360,7 +360,6 @@ void TestRenderedFront() {
         }
         found += matched;
         false_alarms += !matched;
-
       }
     }
     std::printf("rendered front %-10s: %d frames, %d of %d objects within 20 m matched, %d false, worst range "
