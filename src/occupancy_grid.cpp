@@ -70,12 +70,6 @@ double OccupancyGrid::AtVehicle(const Eigen::Vector2d& v) const { return At(Body
 void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, const std::vector<Detection>& detections) {
   pose_ = pose;
   Recentre({pose.x_m, pose.z_m});
-  // This frame's evidence per cell: occupied wins over free; each cell counts once per frame.
-  // The free part of every sector is one fan polygon (the apex and each bearing's free end),
-  // filled at once with the free weight; then the occupied evidence is walked along the bearings
-  // that hit something, each cell keeping the largest weight.
-  delta_.create(sum_.size(), CV_32F);
-  delta_.setTo(0);
   const Eigen::Matrix2d rotation = BodyToWorldRotation(pose);  // one transform per bearing
   const auto cell_of = [&](const Eigen::Vector2d& w) { return Eigen::Vector2d((w - origin_) / options_.cell_m); };
   constexpr int kShift = 4;  // fillPoly's fractional bits
@@ -83,18 +77,12 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
     const Eigen::Vector2d c = (cell_of(w) - Eigen::Vector2d::Constant(0.5)) * (1 << kShift);  // cell centres
     return cv::Point(static_cast<int>(std::lround(c.x())), static_cast<int>(std::lround(c.y())));
   };
-  const auto occupy = [&](const Eigen::Vector2d& w, double weight) {
-    const Eigen::Vector2d c = cell_of(w);
-    const int col = static_cast<int>(std::floor(c.x())), row = static_cast<int>(std::floor(c.y()));
-    if (col < 0 || row < 0 || col >= options_.cells || row >= options_.cells) return;
-    float& d = delta_.at<float>(row, col);
-    d = std::max(d, static_cast<float>(weight));
-  };
   struct Hit {
     Eigen::Vector2d apex, dir;
     double range, sigma;
   };
   std::vector<Hit> hits;
+  std::vector<std::vector<cv::Point>> fans;
   const double step_rad = options_.bearing_step_deg * kPi / 180;
   for (const Sector& s : coverage.sectors) {
     const int bins = std::max(1, static_cast<int>(std::ceil(2 * s.half_angle_rad / step_rad)));
@@ -121,8 +109,49 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
       fan.push_back(vertex(apex + std::min(free_end, options_.free_range_m) * dir));
       if (std::isfinite(r)) hits.push_back({apex, dir, r, sigma});
     }
-    cv::fillPoly(delta_, std::vector<std::vector<cv::Point>>{fan}, cv::Scalar(options_.free_weight), cv::LINE_8, kShift);
+    fans.push_back(std::move(fan));
   }
+  // Only the cells this frame can touch (the fans' and the hits' bounding box, a cell of margin)
+  // hold evidence: the rest of the grid only decays.
+  double lo_x = std::numeric_limits<double>::infinity(), lo_z = lo_x, hi_x = -lo_x, hi_z = -lo_x;
+  const auto extend = [&](double cx, double cz) {
+    lo_x = std::min(lo_x, cx), hi_x = std::max(hi_x, cx), lo_z = std::min(lo_z, cz), hi_z = std::max(hi_z, cz);
+  };
+  for (const std::vector<cv::Point>& fan : fans) {
+    for (const cv::Point& v : fan) extend(v.x / double(1 << kShift), v.y / double(1 << kShift));
+  }
+  for (const Hit& h : hits) {
+    const Eigen::Vector2d c = cell_of(h.apex + (h.range + options_.thickness_m + options_.cell_m) * h.dir);
+    extend(c.x(), c.y());
+  }
+  const cv::Rect grid(0, 0, sum_.cols, sum_.rows);
+  cv::Rect touched;
+  if (lo_x <= hi_x) {
+    const int x0 = static_cast<int>(std::floor(std::max(-1.0, lo_x))) - 1;
+    const int z0 = static_cast<int>(std::floor(std::max(-1.0, lo_z))) - 1;
+    const int x1 = static_cast<int>(std::ceil(std::min(sum_.cols + 1.0, hi_x))) + 2;
+    const int z1 = static_cast<int>(std::ceil(std::min(sum_.rows + 1.0, hi_z))) + 2;
+    touched = cv::Rect(x0, z0, x1 - x0, z1 - z0) & grid;
+  }
+  // This frame's evidence per cell: occupied wins over free; each cell counts once per frame.
+  // The free part of every sector is one fan polygon (the apex and each bearing's free end),
+  // filled at once with the free weight; then the occupied evidence is walked along the bearings
+  // that hit something, each cell keeping the largest weight.
+  delta_.create(sum_.size(), CV_32F);
+  cv::Mat evidence_roi = delta_(touched);
+  evidence_roi.setTo(0);
+  for (const std::vector<cv::Point>& fan : fans) {
+    cv::fillPoly(evidence_roi, std::vector<std::vector<cv::Point>>{fan}, cv::Scalar(options_.free_weight), cv::LINE_8,
+                 kShift, -touched.tl() * (1 << kShift));
+  }
+  const auto occupy = [&](const Eigen::Vector2d& w, double weight) {
+    const Eigen::Vector2d c = cell_of(w);
+    const cv::Point cell(static_cast<int>(std::floor(c.x())), static_cast<int>(std::floor(c.y())));
+    if (!grid.contains(cell)) return;
+    CV_DbgAssert(touched.contains(cell));
+    float& d = delta_.at<float>(cell);
+    d = std::max(d, static_cast<float>(weight));
+  };
   const double walk = options_.cell_m / 2;
   for (const Hit& h : hits) {
     for (double t = std::max(walk, h.range - 2 * h.sigma); t <= h.range + options_.thickness_m; t += walk) {
@@ -131,12 +160,16 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
       occupy(h.apex + t * h.dir, w);
     }
   }
-  // Decay, this frame's evidence, clamp: one pass.
+  // Decay, this frame's evidence, clamp: one pass (no evidence outside the touched cells).
   const float decay = static_cast<float>(options_.decay), clamp = static_cast<float>(options_.clamp);
   for (int row = 0; row < sum_.rows; ++row) {
     float* sum = sum_.ptr<float>(row);
     const float* evidence = delta_.ptr<float>(row);
-    for (int col = 0; col < sum_.cols; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + evidence[col]));
+    const bool in_rows = row >= touched.y && row < touched.y + touched.height;
+    const int a = in_rows ? touched.x : sum_.cols, b = in_rows ? touched.x + touched.width : sum_.cols;
+    for (int col = 0; col < a; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + 0.0f));
+    for (int col = a; col < b; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + evidence[col]));
+    for (int col = b; col < sum_.cols; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + 0.0f));
   }
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -135,15 +136,55 @@ void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap
 // Interest operator: matching along rows needs structure along the rows, so the measure is the
 // window's mean horizontal change of the LoG image, |LoG(x + 1) - LoG(x - 1)|: zero in uniform
 // areas and along horizontal edges (where every disparity fits), large on texture. The window's
-// sum (16-bit, exact) is compared with threshold x area. Temporaries in scratch[0..2].
-void TextureMaskInto(const cv::Mat& log, const StereoOptions& o, cv::Mat* scratch, cv::Mat& textured) {
-  cv::Mat &gradient = scratch[0], &magnitude = scratch[1], &window_sum = scratch[2];
-  cv::Sobel(log, gradient, CV_16S, 1, 0, 1, 1.0, 0.0, cv::BORDER_REPLICATE);
-  cv::convertScaleAbs(gradient, magnitude);
-  cv::boxFilter(magnitude, window_sum, CV_16U, cv::Size(o.block_width, o.block_height), cv::Point(-1, -1), false,
-                cv::BORDER_REPLICATE);
-  cv::compare(window_sum, std::ceil(o.texture_threshold * o.block_width * o.block_height - 1e-9), textured,
-              cv::CMP_GE);
+// sum (exact, in 16 bits) is compared with threshold x area; the image's edges are replicated.
+// One pass of running sums (down the columns, then along the row) into `textured`, with the
+// change image in scratch: the same as cv::Sobel (dx 1, ksize 1), cv::convertScaleAbs,
+// cv::boxFilter (unnormalised) and cv::compare, which cost several times more on views this small.
+void TextureMaskInto(const cv::Mat& log, const StereoOptions& o, cv::Mat& change, cv::Mat& textured) {
+  CV_Assert(log.type() == CV_8U);
+  const int w = log.cols, h = log.rows, rw = o.block_width / 2, rh = o.block_height / 2;
+  change.create(h, w, CV_8U);
+  for (int y = 0; y < h; ++y) {
+    const std::uint8_t* l = log.ptr<std::uint8_t>(y);
+    std::uint8_t* g = change.ptr<std::uint8_t>(y);
+    g[0] = static_cast<std::uint8_t>(std::abs(l[std::min(1, w - 1)] - l[0]));
+    int x = 1;
+#if CV_SIMD
+    for (; x + cv::v_uint8::nlanes + 1 <= w; x += cv::v_uint8::nlanes) {
+      cv::v_store(g + x, cv::v_absdiff(cv::vx_load(l + x + 1), cv::vx_load(l + x - 1)));
+    }
+#endif
+    for (; x < w; ++x) g[x] = static_cast<std::uint8_t>(std::abs(l[std::min(x + 1, w - 1)] - l[x - 1]));
+  }
+  const int threshold = static_cast<int>(std::ceil(o.texture_threshold * o.block_width * o.block_height - 1e-9));
+  textured.create(h, w, CV_8U);
+  std::vector<std::uint16_t> column(w, 0);  // the window's column sums (2 cap x block area < 65536)
+  const auto row = [&](int y) { return change.ptr<std::uint8_t>(std::clamp(y, 0, h - 1)); };
+  // Adds (sign +1) or removes (-1) one row of changes from the column sums.
+  const auto add = [&](const std::uint8_t* g, int sign) {
+    int x = 0;
+#if CV_SIMD
+    for (; x + cv::v_uint16::nlanes <= w; x += cv::v_uint16::nlanes) {
+      const cv::v_uint16 c = cv::vx_load(column.data() + x), v = cv::vx_load_expand(g + x);
+      cv::v_store(column.data() + x, sign > 0 ? c + v : c - v);
+    }
+#endif
+    for (; x < w; ++x) column[x] = static_cast<std::uint16_t>(column[x] + sign * g[x]);
+  };
+  for (int dy = -rh; dy <= rh; ++dy) add(row(dy), 1);
+  for (int y = 0; y < h; ++y) {
+    if (y > 0) {
+      add(row(y + rh), 1);
+      add(row(y - rh - 1), -1);
+    }
+    int sum = 0;
+    for (int dx = -rw; dx <= rw; ++dx) sum += column[std::clamp(dx, 0, w - 1)];
+    std::uint8_t* t = textured.ptr<std::uint8_t>(y);
+    for (int x = 0; x < w; ++x) {
+      if (x > 0) sum += column[std::min(x + rw, w - 1)] - column[std::max(x - rw - 1, 0)];
+      t[x] = sum >= threshold ? 255 : 0;
+    }
+  }
 }
 
 // The coarse level's disparity range: half the fine one's, rounded outwards.
@@ -157,6 +198,13 @@ int HalfCount(const StereoOptions& o) {
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap) {
   cv::Mat scratch[4], out;
   LogPrefilterInto(grey, sigma_px, gain, cap, scratch, out);
+  return out;
+}
+
+cv::Mat TextureMask(const cv::Mat& log, const StereoOptions& options) {
+  if (log.empty() || log.type() != CV_8U) throw Error("stereo: the texture mask needs an 8-bit LoG image");
+  cv::Mat change, out;
+  TextureMaskInto(log, options, change, out);
   return out;
 }
 
@@ -234,14 +282,32 @@ void SadStereoMatcher::FillFromCoarse(const cv::Mat& coarse, int first_column, c
   const float d_lo = static_cast<float>(o.min_disparity);
   const float d_hi = static_cast<float>(o.min_disparity + o.num_disparities - 1);
   cv::parallel_for_(cv::Range(0, fine.rows), [&](const cv::Range& rows) {
+    // The coarse row doubled and each value repeated over its two fine columns (the last one over
+    // the rest), once per coarse row.
+    std::vector<float> up(fine.cols);
+    int up_row = -1;
     for (int y = rows.start; y < rows.end; ++y) {
+      const int cy = std::min(y / 2, coarse.rows - 1);
+      if (cy != up_row) {
+        up_row = cy;
+        const float* c = coarse.ptr<float>(cy);
+        const int last = coarse.cols - 1;
+        for (int x = 0; x < fine.cols; ++x) up[x] = 2.0f * c[std::min(x >> 1, last)];
+      }
       float* f = fine.ptr<float>(y);
-      const float* c = coarse.ptr<float>(std::min(y / 2, coarse.rows - 1));
-      const int last = coarse.cols - 1;
-      for (int x = first_column; x < fine.cols; ++x) {
+      int x = first_column;
+#if CV_SIMD
+      const cv::v_float32 invalid = cv::vx_setall_f32(kInvalidDisparity);
+      const cv::v_float32 lo = cv::vx_setall_f32(d_lo), hi = cv::vx_setall_f32(d_hi);
+      for (; x + cv::v_float32::nlanes <= fine.cols; x += cv::v_float32::nlanes) {
+        const cv::v_float32 v = cv::vx_load(f + x), u = cv::vx_load(up.data() + x);
+        // The invalid +inf coarse value fails u <= hi.
+        cv::v_store(f + x, cv::v_select((v == invalid) & (u >= lo) & (u <= hi), u, v));
+      }
+#endif
+      for (; x < fine.cols; ++x) {
         if (f[x] != kInvalidDisparity) continue;
-        const float d = 2.0f * c[std::min(x >> 1, last)];
-        if (d >= d_lo && d <= d_hi) f[x] = d;  // false for the invalid +inf
+        if (up[x] >= d_lo && up[x] <= d_hi) f[x] = up[x];  // false for the invalid +inf
       }
     }
   });
@@ -251,7 +317,7 @@ void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view) const {
   const StereoOptions& o = options_;
   const cv::Mat grey = ToGrey(image, "prepared");
   LogPrefilterInto(grey, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[0]);
-  TextureMaskInto(view->log[0], o, view->scratch, view->textured[0]);
+  TextureMaskInto(view->log[0], o, view->scratch[0], view->textured[0]);
   if (!o.two_levels) {
     view->log[1].release();
     view->textured[1].release();
@@ -259,7 +325,7 @@ void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view) const {
   }
   cv::pyrDown(grey, view->scratch[4]);
   LogPrefilterInto(view->scratch[4], o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[1]);
-  TextureMaskInto(view->log[1], o, view->scratch, view->textured[1]);
+  TextureMaskInto(view->log[1], o, view->scratch[0], view->textured[1]);
 }
 
 void SadStereoMatcher::Mirror(const PreparedView& view, PreparedView* mirrored) {
@@ -312,7 +378,7 @@ TemporalConsistencyFilter::TemporalConsistencyFilter(double forgetting, double m
 void TemporalConsistencyFilter::Reset() {
   mean_.release();
   var_.release();
-  count_.release();
+  seen_.release();
 }
 
 cv::Mat TemporalConsistencyFilter::Apply(const cv::Mat& disparity) {
@@ -320,32 +386,58 @@ cv::Mat TemporalConsistencyFilter::Apply(const cv::Mat& disparity) {
   if (mean_.size() != disparity.size()) {
     mean_ = cv::Mat(disparity.size(), CV_32F, cv::Scalar(0));
     var_ = cv::Mat(disparity.size(), CV_32F, cv::Scalar(0));
-    count_ = cv::Mat(disparity.size(), CV_8U, cv::Scalar(0));
+    seen_ = cv::Mat(disparity.size(), CV_32F, cv::Scalar(0));
   }
-  cv::Mat out = disparity.clone();
+  cv::Mat out(disparity.size(), CV_32F);
   const float a = static_cast<float>(forgetting_);
+  // The float whose "v > it" says v > max_variance_ (a double) for every float v.
+  float max_variance = static_cast<float>(max_variance_);
+  if (max_variance > max_variance_) max_variance = std::nextafter(max_variance, -kInvalidDisparity);
+  // Per pixel: an invalid disparity resets it; the first valid one starts the mean (variance 0);
+  // later ones update both by West's exponentially weighted formulas; a variance above the limit
+  // suppresses the pixel. The vector and the scalar loop compute the same operations in the same
+  // order.
   for (int y = 0; y < disparity.rows; ++y) {
     const float* d = disparity.ptr<float>(y);
     float* m = mean_.ptr<float>(y);
     float* v = var_.ptr<float>(y);
-    std::uint8_t* n = count_.ptr<std::uint8_t>(y);
+    float* seen = seen_.ptr<float>(y);
     float* o = out.ptr<float>(y);
-    for (int x = 0; x < disparity.cols; ++x) {
+    int x = 0;
+#if CV_SIMD
+    const cv::v_float32 va = cv::vx_setall_f32(a), vb = cv::vx_setall_f32(1.0f - a);
+    const cv::v_float32 inf = cv::vx_setall_f32(kInvalidDisparity), ninf = cv::vx_setall_f32(-kInvalidDisparity);
+    const cv::v_float32 limit = cv::vx_setall_f32(max_variance);
+    const cv::v_float32 zero = cv::vx_setzero_f32(), one = cv::vx_setall_f32(1.0f);
+    for (; x + cv::v_float32::nlanes <= disparity.cols; x += cv::v_float32::nlanes) {
+      const cv::v_float32 dv = cv::vx_load(d + x), mv = cv::vx_load(m + x), vv = cv::vx_load(v + x);
+      const cv::v_float32 valid = (dv < inf) & (dv > ninf);  // false for +-inf and NaN
+      const cv::v_float32 first = cv::vx_load(seen + x) == zero;
+      const cv::v_float32 diff = dv - mv;
+      const cv::v_float32 mean = cv::v_select(first, dv, mv + va * diff);
+      const cv::v_float32 var = cv::v_select(first, zero, vb * (vv + va * diff * diff));
+      cv::v_store(m + x, cv::v_select(valid, mean, mv));
+      cv::v_store(v + x, cv::v_select(valid, var, vv));
+      cv::v_store(seen + x, cv::v_select(valid, one, zero));
+      cv::v_store(o + x, cv::v_select(valid & (var > limit), inf, dv));
+    }
+#endif
+    for (; x < disparity.cols; ++x) {
+      o[x] = d[x];
       if (!std::isfinite(d[x])) {
-        n[x] = 0;
+        seen[x] = 0.0f;
         continue;
       }
-      if (n[x] == 0) {
+      if (seen[x] == 0.0f) {
         m[x] = d[x];
         v[x] = 0.0f;
       } else {
-        // Exponentially weighted mean and variance (West's update).
         const float diff = d[x] - m[x];
         m[x] += a * diff;
         v[x] = (1.0f - a) * (v[x] + a * diff * diff);
       }
-      n[x] = static_cast<std::uint8_t>(std::min(255, n[x] + 1));
-      if (v[x] > max_variance_) o[x] = kInvalidDisparity;
+      seen[x] = 1.0f;
+      if (v[x] > max_variance) o[x] = kInvalidDisparity;
     }
   }
   return out;

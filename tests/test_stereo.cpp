@@ -1,6 +1,6 @@
 // Tests of the stereo matcher: exact answers on shifted textures, prepared views, the interest
-// operator, options that must be refused, the temporal filter, disparity files, and accuracy on
-// real data — Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the
+// operator (also against OpenCV's filters), options that must be refused, the temporal filter,
+// disparity files, and accuracy on real data — Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the
 // real KITTI road pair's road disparity.
 #include <cmath>
 #include <cstdio>
@@ -179,6 +179,30 @@ void TestInterestOperator() {
   const cv::Mat dh = one.Compute(half, half);
   CHECK_EQ(cv::countNonZero(dh(cv::Rect(100, 0, 60, 120)) != dps::kInvalidDisparity), 0);
   CHECK(cv::countNonZero(dh(cv::Rect(20, 10, 50, 100)) != dps::kInvalidDisparity) > 4000);
+  // The operator's one-pass mask against OpenCV's filters composed as step 3 defines it: the
+  // horizontal change (Sobel, dx 1, ksize 1), its magnitude, the window's sum, the threshold;
+  // edges replicated. Sizes from smaller than the window to wider than several vectors, widths
+  // that leave a scalar tail.
+  for (const cv::Size size : {cv::Size(3, 2), cv::Size(9, 9), cv::Size(37, 23), cv::Size(200, 100), cv::Size(101, 51)}) {
+    for (const cv::Size block : {cv::Size(9, 9), cv::Size(5, 11)}) {
+      dps::StereoOptions t;
+      t.block_width = block.width;
+      t.block_height = block.height;
+      t.texture_threshold = 3.3;
+      cv::Mat log(size, CV_8U);
+      cv::RNG rng(size.area() + block.width);
+      rng.fill(log, cv::RNG::UNIFORM, 28, 35);  // weak texture on the left, strong on the right
+      rng.fill(log.colRange(size.width / 2, size.width), cv::RNG::UNIFORM, 0, 63);
+      cv::Mat gradient, magnitude, sum, expected;
+      cv::Sobel(log, gradient, CV_16S, 1, 0, 1, 1.0, 0.0, cv::BORDER_REPLICATE);
+      cv::convertScaleAbs(gradient, magnitude);
+      cv::boxFilter(magnitude, sum, CV_32S, block, cv::Point(-1, -1), false, cv::BORDER_REPLICATE);
+      cv::compare(sum, 3.3 * block.area(), expected, cv::CMP_GE);
+      const cv::Mat mask = dps::TextureMask(log, t);
+      CHECK_EQ(cv::countNonZero(mask != expected), 0);
+      if (size.area() > 1000) CHECK(cv::countNonZero(expected) > 0 && cv::countNonZero(expected) < size.area());
+    }
+  }
 }
 
 void TestBadOptions() {
@@ -219,6 +243,23 @@ void TestTemporalFilter() {
     if (frame == 6) CHECK(std::isfinite(out.at<float>(3, 3)));  // restarts after a gap
   }
   CHECK_EQ(suppressed, 8);
+  // Every column of a wider image given the same sequence gives the same answer (the filter runs
+  // over vectors of pixels and a scalar tail).
+  dps::TemporalConsistencyFilter wide(0.5, 1.0);
+  cv::Mat w(3, 13, CV_32F);
+  for (int frame = 0; frame < 10; ++frame) {
+    w.row(0).setTo(frame % 2 ? 4.0f : 16.0f);
+    w.row(1).setTo(10.0f + 0.1f * frame);
+    w.row(2).setTo(frame == 5 ? dps::kInvalidDisparity : 7.0f);
+    const cv::Mat out = wide.Apply(w);
+    for (int y = 0; y < 3; ++y) {
+      for (int x = 1; x < w.cols; ++x) {
+        const float a = out.at<float>(y, 0), b = out.at<float>(y, x);
+        CHECK(a == b || (!std::isfinite(a) && !std::isfinite(b)));
+      }
+    }
+    if (frame >= 2) CHECK(!std::isfinite(out.at<float>(0, 12)));
+  }
 }
 
 void TestDisparityFiles() {

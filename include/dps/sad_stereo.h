@@ -58,6 +58,11 @@ struct StereoOptions {
 // The LoG band-pass prefilter of step 1: CV_8U in, CV_8U out with values 0..2 cap (cap = 0 LoG).
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap);
 
+// Step 3's interest operator on a LoG image (CV_8U): 255 where the block_width x block_height
+// window's sum of |LoG(x + 1) - LoG(x - 1)| reaches texture_threshold x area (edges replicated),
+// else 0.
+cv::Mat TextureMask(const cv::Mat& log, const StereoOptions& options);
+
 // The matcher. It keeps its working buffers between calls (fresh buffers would cost as much as
 // a good part of the matching), so use one matcher per thread.
 class SadStereoMatcher {
@@ -121,7 +126,7 @@ class TemporalConsistencyFilter {
   double forgetting_;
   double max_variance_;
   cv::Mat mean_, var_;  // CV_32F
-  cv::Mat count_;       // CV_8U frames seen in a row, saturating
+  cv::Mat seen_;        // CV_32F 1 where the last frame was valid, else 0
 };
 
 }  // namespace dps
