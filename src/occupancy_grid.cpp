@@ -185,10 +185,13 @@ std::vector<Eigen::Vector2d> OccupancyGrid::ObstacleCells() const {
   return out;
 }
 
-void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
-  CV_Assert(map.type() == CV_8UC3);
+void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const { Draw(map, map, map_range_m); }
+
+void OccupancyGrid::Draw(const cv::Mat& background, cv::Mat& map, double map_range_m) const {
+  CV_Assert(background.type() == CV_8UC3);
+  if (map.data != background.data) map.create(background.size(), CV_8UC3);
   // Map pixel (u, v) -> vehicle (vx, vz) -> world -> grid cell (column, row): one affine map, so
-  // the grid is resampled with warpAffine (nearest cell) instead of a lookup per pixel.
+  // the grid is resampled by nearest cell instead of a lookup per pixel.
   const double scale = map.cols / (2.0 * map_range_m);
   const double c = std::cos(pose_.heading_rad), s = std::sin(pose_.heading_rad);
   const double k = 1.0 / (scale * options_.cell_m);
@@ -205,13 +208,34 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
   const cv::Matx23d B(M(0, 0) * block, M(0, 1) * block, M(0, 2) + (M(0, 0) + M(0, 1)) * half,
                       M(1, 0) * block, M(1, 1) * block, M(1, 2) + (M(1, 0) + M(1, 1)) * half);
   const cv::Size blocks((map.cols + block - 1) / block, (map.rows + block - 1) / block);
-  // The evidence as 8 bits (128 = unknown, 1 / 255 = clamped free / occupied) resamples fast.
-  cv::Mat quantised, level;
+  // The evidence as 8 bits (128 = unknown, 1 / 255 = clamped free / occupied), sampled at the
+  // nearest cell as cv::warpAffine (INTER_NEAREST, WARP_INVERSE_MAP) does: coordinates in 10-bit
+  // fixed point, rounded; outside the grid unknown. (The same cells, at a fraction of its cost.)
+  cv::Mat quantised;
   sum_.convertTo(quantised, CV_8U, 127.0 / options_.clamp, 128.0);
-  cv::warpAffine(quantised, level, B, blocks, cv::INTER_NEAREST | cv::WARP_INVERSE_MAP, cv::BORDER_CONSTANT,
-                 cv::Scalar(128));
+  constexpr int kBits = 10;
+  const auto fixed = [](double v) { return cv::saturate_cast<int>(v * (1 << kBits)); };
+  std::vector<int> column_step(blocks.width), row_step(blocks.width);
+  for (int b = 0; b < blocks.width; ++b) {
+    column_step[b] = fixed(B(0, 0) * b);
+    row_step[b] = fixed(B(1, 0) * b);
+  }
+  cv::Mat level(blocks, CV_8U);
+  for (int b = 0; b < blocks.height; ++b) {
+    const int column0 = fixed(B(0, 1) * b + B(0, 2)) + (1 << (kBits - 1));
+    const int row0 = fixed(B(1, 1) * b + B(1, 2)) + (1 << (kBits - 1));
+    std::uint8_t* out = level.ptr<std::uint8_t>(b);
+    for (int a = 0; a < blocks.width; ++a) {
+      const int column = (column0 + column_step[a]) >> kBits, row = (row0 + row_step[a]) >> kBits;
+      out[a] = static_cast<unsigned>(column) < static_cast<unsigned>(quantised.cols) &&
+                       static_cast<unsigned>(row) < static_cast<unsigned>(quantised.rows)
+                   ? quantised.at<std::uint8_t>(row, column)
+                   : 128;
+    }
+  }
   // Blend towards grey (occupied) or light green (free) by |evidence| / clamp, in 1/128 steps:
-  // pixel += (target - pixel) * |level - 128| / 128 (unknown cells, level 128, leave it as it is).
+  // pixel = background + (target - background) * |level - 128| / 128 (unknown cells, level 128,
+  // leave the background as it is).
   cv::parallel_for_(cv::Range(0, map.rows), [&](const cv::Range& rows) {
     const int n = block;
     std::vector<std::uint8_t> expanded(n > 1 ? level.cols * n : 0);
@@ -236,6 +260,7 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
         }
         e = out;
       }
+      const std::uint8_t* bg = background.ptr<std::uint8_t>(v);
       std::uint8_t* px = map.ptr<std::uint8_t>(v);
       int u = 0;
 #if CV_SIMD
@@ -258,11 +283,14 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
       };
       for (; u + cv::v_uint8::nlanes <= map.cols; u += cv::v_uint8::nlanes) {
         const cv::v_uint8 levels = cv::vx_load(e + u);
-        if (cv::v_check_all(levels == unknown)) continue;  // most of a map lies beyond the views
+        cv::v_uint8 b, g, r;
+        cv::v_load_deinterleave(bg + 3 * u, b, g, r);
+        if (cv::v_check_all(levels == unknown)) {  // most of a map lies beyond the views
+          if (px != bg) cv::v_store_interleave(px + 3 * u, b, g, r);
+          continue;
+        }
         cv::v_uint16 e0, e1;
         cv::v_expand(levels, e0, e1);
-        cv::v_uint8 b, g, r;
-        cv::v_load_deinterleave(px + 3 * u, b, g, r);
         cv::v_store_interleave(px + 3 * u, channel(e0, e1, b, free_bg), channel(e0, e1, g, free_g),
                                channel(e0, e1, r, free_bg));
       }
@@ -273,8 +301,8 @@ void OccupancyGrid::Draw(cv::Mat& map, double map_range_m) const {
         const int targets[3] = {occupied ? kOccupiedGrey : kFreeBlueRed, occupied ? kOccupiedGrey : kFreeGreen,
                                 occupied ? kOccupiedGrey : kFreeBlueRed};
         for (int k = 0; k < 3; ++k) {
-          std::uint8_t& c = px[3 * u + k];
-          c = static_cast<std::uint8_t>(c + (((targets[k] - c) * a) >> 7));
+          const int c = bg[3 * u + k];
+          px[3 * u + k] = static_cast<std::uint8_t>(c + (((targets[k] - c) * a) >> 7));
         }
       }
     }

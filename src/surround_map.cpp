@@ -134,8 +134,7 @@ cv::Mat DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const
 void DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
                   const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
                   const MapOptions& options, const std::string& caption, cv::Mat& map) {
-  background.copyTo(map);
-  grid.Draw(map, options.range_m);
+  grid.Draw(background, map, options.range_m);
   DrawOwnCar(map, vehicle, options);
   DrawObstacles(map, detections, options, caption);
   DrawTracks(map, tracks, options);

@@ -85,6 +85,13 @@ void TestDraw() {
               map.rows * map.cols);
   CHECK(occupied > 100 && free > 1000 && shown > 0);
   CHECK(agree >= 0.99 * map.rows * map.cols);
+  // Drawn over a background into another picture (its old buffer of another size reused), the
+  // same picture, and the background untouched.
+  const cv::Mat background(300, 300, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::Mat into(10, 20, CV_8UC3, cv::Scalar(1, 2, 3));
+  grid.Draw(background, into, range);
+  CHECK_EQ(cv::norm(into, map, cv::NORM_INF), 0.0);
+  CHECK_EQ(cv::countNonZero(background.reshape(1) != 255), 0);
 }
 
 }  // namespace

@@ -59,6 +59,8 @@ class OccupancyGrid {
   // Draws the grid onto a map picture (MapOptions geometry: +Z up, vehicle at the centre):
   // occupied cells dark grey, free cells light green, unknown left as it is.
   void Draw(cv::Mat& map, double map_range_m) const;
+  // The same over a copy of `background` (CV_8UC3) into `map` (its buffer reused), in one pass.
+  void Draw(const cv::Mat& background, cv::Mat& map, double map_range_m) const;
 
  private:
   void Recentre(const Eigen::Vector2d& world);
