@@ -117,20 +117,39 @@ void StereoOptions::Check() const {
 
 namespace {
 
-// The LoG prefilter into `out`, reusing the temporaries scratch[0..3].
+// The LoG prefilter into `out`, reusing the temporaries scratch[0..2].
 void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap, cv::Mat* scratch, cv::Mat& out) {
-  cv::Mat &f = scratch[0], &blurred = scratch[1], &log = scratch[2], &shifted = scratch[3];
+  cv::Mat &f = scratch[0], &blurred = scratch[1], &log = scratch[2];
   // In floating point: blurring into 8 bits first would quantise the image, and the Laplacian
   // would amplify the rounding into noise that swamps weak texture.
   grey.convertTo(f, CV_32F);
   const int ksize = 2 * static_cast<int>(std::ceil(3.0 * sigma_px)) + 1;  // +-3 sigma
   cv::GaussianBlur(f, blurred, cv::Size(ksize, ksize), sigma_px, sigma_px, cv::BORDER_REPLICATE);
   cv::Laplacian(blurred, log, CV_32F, 1, gain, 0.0, cv::BORDER_REPLICATE);
-  // Clamp to +-cap and offset by cap: round to 8 bits around 128 (saturating), then a table.
-  log.convertTo(shifted, CV_8U, 1.0, 128.0);
-  std::uint8_t table[256];
-  for (int v = 0; v < 256; ++v) table[v] = static_cast<std::uint8_t>(std::clamp(v - 128, -cap, cap) + cap);
-  cv::LUT(shifted, cv::Mat(1, 256, CV_8U, table), out);
+  // Rounded about 128 (in float, to nearest, ties to even: as convertTo to 8 bits with an offset
+  // of 128), clamped to +-cap and offset by cap.
+  out.create(log.size(), CV_8U);
+  for (int y = 0; y < log.rows; ++y) {
+    const float* l = log.ptr<float>(y);
+    std::uint8_t* o = out.ptr<std::uint8_t>(y);
+    int x = 0;
+#if CV_SIMD
+    const cv::v_float32 mid = cv::vx_setall_f32(128.0f);
+    const cv::v_int32 lo = cv::vx_setall_s32(128 - cap), hi = cv::vx_setall_s32(128 + cap);
+    const cv::v_int32 offset = cv::vx_setall_s32(cap - 128);
+    constexpr int n = cv::v_int32::nlanes;
+    for (; x + 4 * n <= log.cols; x += 4 * n) {
+      cv::v_int32 r[4];
+      for (int i = 0; i < 4; ++i) {
+        r[i] = cv::v_min(cv::v_max(cv::v_round(cv::vx_load(l + x + i * n) + mid), lo), hi) + offset;
+      }
+      cv::v_store(o + x, cv::v_pack_u(cv::v_pack(r[0], r[1]), cv::v_pack(r[2], r[3])));
+    }
+#endif
+    for (; x < log.cols; ++x) {
+      o[x] = static_cast<std::uint8_t>(std::clamp(cvRound(l[x] + 128.0f) - 128, -cap, cap) + cap);
+    }
+  }
 }
 
 // Interest operator: matching along rows needs structure along the rows, so the measure is the
@@ -196,7 +215,7 @@ int HalfCount(const StereoOptions& o) {
 }  // namespace
 
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap) {
-  cv::Mat scratch[4], out;
+  cv::Mat scratch[3], out;
   LogPrefilterInto(grey, sigma_px, gain, cap, scratch, out);
   return out;
 }

@@ -2,7 +2,9 @@
 // operator (also against OpenCV's filters), options that must be refused, the temporal filter,
 // disparity files, and accuracy on real data — Middlebury tsukuba and venus against cv::StereoBM computed in the same run, and the
 // real KITTI road pair's road disparity.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -179,6 +181,22 @@ void TestInterestOperator() {
   const cv::Mat dh = one.Compute(half, half);
   CHECK_EQ(cv::countNonZero(dh(cv::Rect(100, 0, 60, 120)) != dps::kInvalidDisparity), 0);
   CHECK(cv::countNonZero(dh(cv::Rect(20, 10, 50, 100)) != dps::kInvalidDisparity) > 4000);
+  // The prefilter's rounding and clamping pass against OpenCV's: the LoG in floating point,
+  // converted to 8 bits about 128, then clamped by a table to +-cap and offset by cap.
+  for (const cv::Size size : {cv::Size(37, 23), cv::Size(200, 100)}) {
+    const cv::Mat grey = Texture(size.width, size.height, 9);
+    cv::Mat f, blurred, log, shifted, expected;
+    grey.convertTo(f, CV_32F);
+    cv::GaussianBlur(f, blurred, cv::Size(7, 7), 1.0, 1.0, cv::BORDER_REPLICATE);
+    cv::Laplacian(blurred, log, CV_32F, 1, 6.0, 0.0, cv::BORDER_REPLICATE);
+    log.convertTo(shifted, CV_8U, 1.0, 128.0);
+    cv::Mat table(1, 256, CV_8U);
+    for (int v = 0; v < 256; ++v) table.at<std::uint8_t>(v) = static_cast<std::uint8_t>(std::clamp(v - 128, -31, 31) + 31);
+    cv::LUT(shifted, table, expected);
+    const cv::Mat prefiltered = dps::LogPrefilter(grey, 1.0, 6.0, 31);
+    CHECK_EQ(cv::countNonZero(prefiltered != expected), 0);
+    CHECK(cv::countNonZero(expected == 0) > 0 && cv::countNonZero(expected == 62) > 0);  // both clamps reached
+  }
   // The operator's one-pass mask against OpenCV's filters composed as step 3 defines it: the
   // horizontal change (Sobel, dx 1, ksize 1), its magnitude, the window's sum, the threshold;
   // edges replicated. Sizes from smaller than the window to wider than several vectors, widths
