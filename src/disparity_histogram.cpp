@@ -286,11 +286,24 @@ std::vector<HistogramComponent> LinkComponents(std::vector<HistogramComponent> c
 }
 
 std::pair<int, int> ValidColumns(const cv::Mat& disparity) {
-  cv::Mat any;
-  cv::reduce(disparity < kInvalidDisparity, any, 0, cv::REDUCE_MAX);
-  int first = 0, last = any.cols - 1;
-  while (first < any.cols && !any.at<std::uint8_t>(0, first)) ++first;
-  while (last >= 0 && !any.at<std::uint8_t>(0, last)) --last;
+  CV_Assert(disparity.type() == CV_32F);
+  // Each row only needs looking at up to the first (from its last) valid column found so far.
+  int first = disparity.cols, last = -1;
+  for (int y = 0; y < disparity.rows; ++y) {
+    const float* d = disparity.ptr<float>(y);
+    for (int x = 0; x < first; ++x) {
+      if (d[x] < kInvalidDisparity) {
+        first = x;
+        break;
+      }
+    }
+    for (int x = disparity.cols - 1; x > last; --x) {
+      if (d[x] < kInvalidDisparity) {
+        last = x;
+        break;
+      }
+    }
+  }
   return {first, last};
 }
 

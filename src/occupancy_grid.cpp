@@ -162,14 +162,28 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
   }
   // Decay, this frame's evidence, clamp: one pass (no evidence outside the touched cells).
   const float decay = static_cast<float>(options_.decay), clamp = static_cast<float>(options_.clamp);
+  // sum = min(clamp, max(-clamp, sum * decay + evidence)) over columns [from, to) of a row, with
+  // the evidence (nullptr: none, +0), in vectors and a scalar tail of the same operations.
+  const auto pass = [&](float* sum, const float* evidence, int from, int to) {
+    int col = from;
+#if CV_SIMD
+    const cv::v_float32 d = cv::vx_setall_f32(decay), hi = cv::vx_setall_f32(clamp), lo = cv::vx_setall_f32(-clamp);
+    for (; col + cv::v_float32::nlanes <= to; col += cv::v_float32::nlanes) {
+      const cv::v_float32 e = evidence ? cv::vx_load(evidence + col) : cv::vx_setzero_f32();
+      cv::v_store(sum + col, cv::v_min(cv::v_max(cv::vx_load(sum + col) * d + e, lo), hi));
+    }
+#endif
+    for (; col < to; ++col) {
+      sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + (evidence ? evidence[col] : 0.0f)));
+    }
+  };
   for (int row = 0; row < sum_.rows; ++row) {
     float* sum = sum_.ptr<float>(row);
-    const float* evidence = delta_.ptr<float>(row);
     const bool in_rows = row >= touched.y && row < touched.y + touched.height;
     const int a = in_rows ? touched.x : sum_.cols, b = in_rows ? touched.x + touched.width : sum_.cols;
-    for (int col = 0; col < a; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + 0.0f));
-    for (int col = a; col < b; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + evidence[col]));
-    for (int col = b; col < sum_.cols; ++col) sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + 0.0f));
+    pass(sum, nullptr, 0, a);
+    pass(sum, delta_.ptr<float>(row), a, b);
+    pass(sum, nullptr, b, sum_.cols);
   }
 }
 
@@ -283,12 +297,15 @@ void OccupancyGrid::Draw(const cv::Mat& background, cv::Mat& map, double map_ran
       };
       for (; u + cv::v_uint8::nlanes <= map.cols; u += cv::v_uint8::nlanes) {
         const cv::v_uint8 levels = cv::vx_load(e + u);
-        cv::v_uint8 b, g, r;
-        cv::v_load_deinterleave(bg + 3 * u, b, g, r);
         if (cv::v_check_all(levels == unknown)) {  // most of a map lies beyond the views
-          if (px != bg) cv::v_store_interleave(px + 3 * u, b, g, r);
+          if (px != bg) {
+            const int lanes = cv::v_uint8::nlanes;
+            for (int i = 0; i < 3; ++i) cv::v_store(px + 3 * u + i * lanes, cv::vx_load(bg + 3 * u + i * lanes));
+          }
           continue;
         }
+        cv::v_uint8 b, g, r;
+        cv::v_load_deinterleave(bg + 3 * u, b, g, r);
         cv::v_uint16 e0, e1;
         cv::v_expand(levels, e0, e1);
         cv::v_store_interleave(px + 3 * u, channel(e0, e1, b, free_bg), channel(e0, e1, g, free_g),
