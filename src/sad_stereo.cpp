@@ -177,6 +177,10 @@ void TextureMaskInto(const cv::Mat& log, const StereoOptions& o, cv::Mat& change
   }
   const int threshold = static_cast<int>(std::ceil(o.texture_threshold * o.block_width * o.block_height - 1e-9));
   textured.create(h, w, CV_8U);
+  if (threshold > 0xFFFF) {  // above any window's sum
+    textured.setTo(0);
+    return;
+  }
   std::vector<std::uint16_t> column(w, 0);  // the window's column sums (2 cap x block area < 65536)
   const auto row = [&](int y) { return change.ptr<std::uint8_t>(std::clamp(y, 0, h - 1)); };
   // Adds (sign +1) or removes (-1) one row of changes from the column sums.
@@ -190,19 +194,35 @@ void TextureMaskInto(const cv::Mat& log, const StereoOptions& o, cv::Mat& change
 #endif
     for (; x < w; ++x) column[x] = static_cast<std::uint16_t>(column[x] + sign * g[x]);
   };
+  // Along the row: prefix sums of the column sums with the edges replicated (16 bits, modulo
+  // 2^16: a window's difference of two prefixes is exact), prefix[i] = sum of padded[0 .. i).
+  std::vector<std::uint16_t> prefix(w + 2 * rw + 1);
   for (int dy = -rh; dy <= rh; ++dy) add(row(dy), 1);
   for (int y = 0; y < h; ++y) {
     if (y > 0) {
       add(row(y + rh), 1);
       add(row(y - rh - 1), -1);
     }
-    int sum = 0;
-    for (int dx = -rw; dx <= rw; ++dx) sum += column[std::clamp(dx, 0, w - 1)];
-    std::uint8_t* t = textured.ptr<std::uint8_t>(y);
-    for (int x = 0; x < w; ++x) {
-      if (x > 0) sum += column[std::min(x + rw, w - 1)] - column[std::max(x - rw - 1, 0)];
-      t[x] = sum >= threshold ? 255 : 0;
+    std::uint16_t running = 0;
+    for (int i = 0; i < w + 2 * rw; ++i) {
+      prefix[i] = running;
+      running = static_cast<std::uint16_t>(running + column[std::clamp(i - rw, 0, w - 1)]);
     }
+    prefix[w + 2 * rw] = running;
+    // The window of x covers padded [x, x + 2 rw].
+    std::uint8_t* t = textured.ptr<std::uint8_t>(y);
+    const std::uint16_t* p = prefix.data();
+    int x = 0;
+#if CV_SIMD
+    const cv::v_uint16 limit = cv::vx_setall_u16(static_cast<std::uint16_t>(std::max(threshold, 0)));
+    constexpr int n = cv::v_uint16::nlanes;
+    for (; x + 2 * n <= w; x += 2 * n) {
+      const cv::v_uint16 a = cv::vx_load(p + x + 2 * rw + 1) - cv::vx_load(p + x);
+      const cv::v_uint16 b = cv::vx_load(p + x + n + 2 * rw + 1) - cv::vx_load(p + x + n);
+      cv::v_store(t + x, cv::v_pack(cv::v_reinterpret_as_u16(a >= limit), cv::v_reinterpret_as_u16(b >= limit)));
+    }
+#endif
+    for (; x < w; ++x) t[x] = static_cast<std::uint16_t>(p[x + 2 * rw + 1] - p[x]) >= threshold ? 255 : 0;
   }
 }
 
