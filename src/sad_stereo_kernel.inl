@@ -169,9 +169,13 @@ void MatchRows(const SadKernelInput& in, int y0, int y1, const SadKernelBuffers&
           vmin = cv::v_min(vmin, c);
           kv += step;
         }
-        c_best = cv::v_reduce_min(vmin);
-        k_best = cv::v_reduce_min(cv::v_select(vmin == cv::vx_setall_u16(static_cast<std::uint16_t>(c_best)),
-                                               vidx, cv::vx_setall_u16(kMaxCost)));
+        // The smallest cost and, among its lanes, the smallest k, in one reduction of cost:k keys.
+        cv::v_uint32 c0, c1, k0, k1;
+        cv::v_expand(vmin, c0, c1);
+        cv::v_expand(vidx, k0, k1);
+        const unsigned best = cv::v_reduce_min(cv::v_min((c0 << 16) | k0, (c1 << 16) | k1));
+        c_best = static_cast<int>(best >> 16);
+        k_best = static_cast<int>(best & 0xFFFF);
       }
 #else
       if (slide) SlideWindow(sad, hin, hout, np);
