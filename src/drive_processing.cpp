@@ -153,7 +153,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
       char caption[128];
       std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
                     out.detections.size());
-      grid.Update(ego, pipeline.coverage(), out.detections);
+      grid.Update(ego, out.coverage, out.detections);
       // The picture only when it is written (--no-video without PNGs: the CSVs alone).
       if (video.isOpened() || png) {
         DrawFrameMap(map_background, grid, rig.vehicle, out.detections, frame_tracks, o.map, caption, map);

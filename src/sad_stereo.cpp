@@ -240,6 +240,11 @@ cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap)
   return out;
 }
 
+std::pair<int, int> MatchedColumns(int width, const StereoOptions& options) {
+  const ColumnRange columns = MatchableColumns(width, options.min_disparity, options.num_disparities, options.block_width);
+  return {columns.lo, columns.hi};
+}
+
 cv::Mat TextureMask(const cv::Mat& log, const StereoOptions& options) {
   if (log.empty() || log.type() != CV_8U) throw Error("stereo: the texture mask needs an 8-bit LoG image");
   cv::Mat change, out;

@@ -123,6 +123,27 @@ SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
 
 SideDetector::~SideDetector() = default;
 
+Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
+                         double x_hi) {
+  const auto bearing = [&](double x) {
+    const Eigen::Vector3d ray = view.vehicle_from_view * Eigen::Vector3d((x - view.cx) / view.focal_px, 0.0, 1.0);
+    return Eigen::Vector2d(ray.x(), ray.z()).normalized();
+  };
+  const Eigen::Vector2d a = bearing(x_lo), b = bearing(x_hi), mid = a + b;
+  Sector s;
+  s.name = name;
+  s.apex = apex;
+  s.direction_rad = std::atan2(mid.x(), mid.y());
+  s.half_angle_rad = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) / 2;
+  return s;
+}
+
+std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo) {
+  const auto [first, last] = MatchedColumns(width, stereo);
+  if (side == Side::kLeft) return {width - 1 - last, width - 1 - first};
+  return {first, last};
+}
+
 int SideDetector::ScaleSixteenths(double baseline_m) const {
   const double upper = options_.stereo.min_disparity + options_.stereo.num_disparities - 1;
   const double scale = upper * options_.min_static_distance_m / (options_.focal_px * baseline_m);
@@ -221,6 +242,8 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   prepare(current, &prepared_);
   r.disparity = matcher_->Compute(prepared_, last_prepared_);
   if (side_ == Side::kLeft) cv::flip(r.disparity, r.disparity, 1);
+  const auto [matched_first, matched_last] = SideMatchedColumns(side_, spec.width, options_.stereo);
+  r.sector = ViewColumnsSector(camera_.name, {t.x(), t.z()}, spec, matched_first, matched_last);
   std::swap(last_prepared_, prepared_);
   last_view_ = current;
   last_key_ = current_key;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <tuple>
 
 #include <opencv2/core/utility.hpp>
 
@@ -56,10 +57,14 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
   const Eigen::Vector2d lg(l.x(), l.z()), rg(r.x(), r.z()), across(std::cos(axis), -std::sin(axis));
   c.sectors.push_back({"front", (lg + rg) / 2, axis, half, across.dot(rg - lg) / 2 / std::tan(half)});
   if (o.sides) {
-    const double half = std::atan(o.side.view_width / 2.0 / o.side.focal_px);
-    const double pi = 3.14159265358979323846;
-    c.sectors.push_back({"left", {l.x(), l.z()}, -pi / 2, half});
-    c.sectors.push_back({"right", {r.x(), r.z()}, pi / 2, half});
+    // Each side view's columns that motion stereo matches, at the views' full size (at speed the
+    // views shrink and their matched columns span less: SideResult::sector is each frame's).
+    for (const auto& [name, side, at] : {std::make_tuple("left", Side::kLeft, l), std::make_tuple("right", Side::kRight, r)}) {
+      const ViewSpec view = SideViewSpec(side, o.side.view_width, o.side.view_height, o.side.focal_px, 0.0,
+                                         o.side.horizon_fraction);
+      const auto [first, last] = SideMatchedColumns(side, view.width, o.side.stereo);
+      c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last));
+    }
   }
   return c;
 }
@@ -151,8 +156,10 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
   out.sides_ms = task_ms[kLeft] + task_ms[kRight];
   out.detect_ms = ms(t0, now());
   out.detections = out.front.detections;
+  out.coverage.sectors.push_back(coverage_.sectors.front());
   for (const SideResult* s : {&out.left, &out.right}) {
-    if (s->skipped) continue;
+    if (!sides || s->skipped) continue;
+    out.coverage.sectors.push_back(s->sector);
     for (const Detection& d : s->detections) out.detections.push_back(d);
   }
   sides_last_ = sides;  // the side detectors saw this frame as their current one

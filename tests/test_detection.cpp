@@ -2,9 +2,12 @@
 // the front projection against hand-computed points, fusion of parts, the scoring rules of
 // DESIGN.md §5 on hand-made cases, and front detection on rendered drives with known truth
 // (a lead car, the empty road, a pole beyond a parked car, two cars parked in a row).
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <cstdio>
+
+#include <opencv2/imgproc.hpp>
 
 #include "check.h"
 #include "dps/disparity_histogram.h"
@@ -12,6 +15,7 @@
 #include "dps/evaluation.h"
 #include "dps/front_detection.h"
 #include "dps/rig_io.h"
+#include "dps/sad_stereo.h"
 #include "dps/scene_io.h"
 #include "dps/surround_pipeline.h"
 #include "dps/synth.h"
@@ -433,6 +437,52 @@ void TestFrontCoverage() {
   }
 }
 
+// Each side's sector is the columns motion stereo matches: those whose every searched disparity
+// keeps the window inside both views (worked out here from the stereo options), seen from the
+// camera; the strips beyond them at either edge of the view are not in it. The matcher leaves
+// exactly those strips invalid.
+void TestSideCoverage() {
+  const dps::Rig rig = dps::ReadRig(kSource + "/data/rigs/omni_pair.yaml");
+  const dps::PipelineOptions o = dps::DefaultPipelineOptions(rig);
+  const dps::Coverage coverage = dps::PipelineCoverage(rig, o);
+  CHECK_EQ(coverage.sectors.size(), size_t(3));
+  const dps::StereoOptions& st = o.side.stereo;
+  const int w = o.side.view_width, rw = st.block_width / 2, d_max = st.min_disparity + st.num_disparities - 1;
+  const int lo = rw + std::max(0, d_max), hi = w - 1 - rw + std::min(0, st.min_disparity);  // of the matched image
+  for (const dps::Side side : {dps::Side::kLeft, dps::Side::kRight}) {
+    const bool left = side == dps::Side::kLeft;
+    const dps::Sector& sector = coverage.sectors[left ? 1 : 2];
+    CHECK_EQ(sector.name, std::string(left ? "left" : "right"));
+    const dps::ViewSpec view = dps::SideViewSpec(side, w, o.side.view_height, o.side.focal_px, 0.0, o.side.horizon_fraction);
+    const Eigen::Vector3d camera = rig.Camera(left ? "left" : "right").vehicle_from_camera.t;
+    // The left view is matched mirrored: its matched columns, unmirrored.
+    const int first = left ? w - 1 - hi : lo, last = left ? w - 1 - lo : hi;
+    const auto ground = [&](double x) -> Eigen::Vector2d {  // 5 m from the camera along column x
+      const Eigen::Vector3d ray = view.vehicle_from_view * Eigen::Vector3d((x - view.cx) / view.focal_px, 0, 1);
+      return Eigen::Vector2d(camera.x(), camera.z()) + 5.0 * Eigen::Vector2d(ray.x(), ray.z()).normalized();
+    };
+    for (const int x : {first + 1, (first + last) / 2, last - 1}) CHECK(sector.Contains(ground(x)));
+    for (const int x : {first - 2, 10, last + 2, w - 10}) CHECK(!sector.Contains(ground(x)));
+    std::printf("%s side: columns %d-%d of %d matched, sector %.1f to %.1f degrees\n", sector.name.c_str(), first, last,
+                w, (sector.direction_rad - sector.half_angle_rad) * 180 / M_PI,
+                (sector.direction_rad + sector.half_angle_rad) * 180 / M_PI);
+  }
+  // The matcher's valid columns on a textured pair shifted by a disparity in the range.
+  cv::Mat a(60, w, CV_8U), b;
+  cv::RNG(7).fill(a, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(a, a, cv::Size(), 1.2);
+  const cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, -5, 0, 1, 0);
+  cv::warpAffine(a, b, shift, a.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  dps::SadStereoMatcher matcher(st);
+  const cv::Mat d = matcher.Compute(a, b);
+  cv::Mat valid_columns;
+  cv::reduce(d < dps::kInvalidDisparity, valid_columns, 0, cv::REDUCE_MAX);
+  CHECK_EQ(cv::countNonZero(valid_columns.colRange(0, lo)), 0);
+  CHECK_EQ(cv::countNonZero(valid_columns.colRange(hi + 1, w)), 0);
+  CHECK(valid_columns.at<std::uint8_t>(0, lo) && valid_columns.at<std::uint8_t>(0, hi));
+  CHECK(dps::MatchedColumns(w, st) == std::make_pair(lo, hi));
+}
+
 // Front detections of the parked row's frame `last` (straight at 8 m/s; `objects` placed at
 // t = 0; frames 0..last detected in turn, as dps-process does); prints them and returns them and
 // the frame's truth.
@@ -552,6 +602,7 @@ int main() {
   TestFusion();
   TestEvaluation();
   TestFrontCoverage();
+  TestSideCoverage();
   TestRenderedFront();
   TestPoleBeyondCar();
   TestCarsInRow();

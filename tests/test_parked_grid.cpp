@@ -56,11 +56,11 @@ void TestParkedCarsGrid() {
     in.motion_known = f > 0;
     if (f > 0) in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(f - 1), in.t_s);
     const dps::FrameOutput out = pipeline.Process(in);
-    grid.Update(state.ego, pipeline.coverage(), out.detections);
+    grid.Update(state.ego, out.coverage, out.detections);
     std::vector<std::function<void()>> alongside;
     if (f > 0) {
       alongside.push_back([&] {
-        overlapped_grid.Update(pending_ego, overlapped.coverage(), pending.detections);
+        overlapped_grid.Update(pending_ego, pending.coverage, pending.detections);
         ++alongside_runs;
       });
     }
@@ -74,7 +74,7 @@ void TestParkedCarsGrid() {
     pending_ego = state.ego;
     last = in;
   }
-  overlapped_grid.Update(pending_ego, overlapped.coverage(), pending.detections);
+  overlapped_grid.Update(pending_ego, pending.coverage, pending.detections);
   CHECK_EQ(alongside_runs, frames - 1);
   CHECK_EQ(mismatches, 0);
   int differing_cells = 0;

@@ -94,6 +94,16 @@ void TestParkedBeside() {
   const dps::SideResult r = Detect(p, "right", dps::Side::kRight);
   CHECK(r.view_scale < 1.0);
   CheckPlacement(r, p.truth, "parked car beside, right camera, 640x480");
+  // The frame's sector: the matched columns of the shrunk views span less than at full size, and
+  // everything found lies in it.
+  const dps::Sector& full = dps::PipelineCoverage(p.rig, dps::DefaultPipelineOptions(p.rig)).sectors[2];
+  CHECK_EQ(r.sector.name, std::string("right"));
+  CHECK(r.sector.half_angle_rad < full.half_angle_rad - 0.05);
+  int outside = 0;
+  for (const dps::Detection& d : r.detections) {
+    for (const Eigen::Vector2d& q : d.points) outside += !r.sector.Contains(q);
+  }
+  CHECK_EQ(outside, 0);
   // At the paper's 320x240 the same car; the views are 112x56 at this speed, so the velocity is
   // coarser.
   const Pair small = Render(car, "right", 320, 240);

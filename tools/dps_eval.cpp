@@ -23,10 +23,11 @@ A counted object left unmatched may be matched by a detection outside the zone (
 19.5 m, the detection at 20.3 m); such a detection is not counted for precision.
 Prints recall, precision and range errors per range band and per source.
 
-Field of view: with --rig, the sectors the default pipeline's views cover, each +-atan(width / 2f):
-the front pair where both cameras' views overlap (a sector from where the left view's right edge
-crosses the right view's left edge), each side view from its camera; without it, every direction
-counts.
+Field of view: with --rig, the sectors the default pipeline processes: the front pair where both
+cameras' views overlap (+-atan(width / 2f) from where the left view's right edge crosses the right
+view's left edge), each side view from its camera over the columns motion stereo matches at the
+views' full size (not the strips at its edges where a match could lie outside the previous view);
+without it, every direction counts.
 
   --detections FILE   detections.csv
   --tracks FILE       tracks.csv: scored the same way on (x, z), plus the median velocity error

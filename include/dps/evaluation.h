@@ -16,10 +16,11 @@
 // in the zone; range error = |detection range - near-point range| of the counted matches, per band
 // of the near point's range.
 //
-// Field of view: the pipeline's views are sectors on the ground, each an apex (the viewpoint,
-// or the front pair's midpoint), a direction and a half-angle (atan of half the view width over
-// the focal length); the front pair's begins ahead of its apex, where both views overlap.
-// Without a coverage every direction counts.
+// Field of view: what the pipeline processes is sectors on the ground, each an apex (the
+// viewpoint, or the front pair's midpoint), a direction and a half-angle (for the front pair atan
+// of half the view width over the focal length, beginning ahead of its apex where both views
+// overlap; for a side view the span of the columns motion stereo matches). Without a coverage
+// every direction counts.
 #pragma once
 
 #include <string>

@@ -28,6 +28,7 @@
 
 #include <limits>
 #include <memory>
+#include <utility>
 
 #include <opencv2/core.hpp>
 
@@ -57,6 +58,11 @@ struct StereoOptions {
 
 // The LoG band-pass prefilter of step 1: CV_8U in, CV_8U out with values 0..2 cap (cap = 0 LoG).
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap);
+
+// The columns (first, last; inclusive) of a `width`-wide reference image that the matcher gives
+// disparities for: those where the window of every searched disparity lies inside both images.
+// The others stay invalid (their match could lie outside the other image).
+std::pair<int, int> MatchedColumns(int width, const StereoOptions& options);
 
 // Step 3's interest operator on a LoG image (CV_8U): 255 where the block_width x block_height
 // window's sum of |LoG(x + 1) - LoG(x - 1)| reaches texture_threshold x area (edges replicated),

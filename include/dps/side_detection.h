@@ -24,6 +24,7 @@
 #include "dps/detection.h"
 #include "dps/disparity_histogram.h"
 #include "dps/ego_motion.h"
+#include "dps/evaluation.h"
 #include "dps/rig.h"
 #include "dps/sad_stereo.h"
 #include "dps/virtual_view.h"
@@ -93,8 +94,20 @@ struct SideResult {
   cv::Mat obstacle;            // CV_8U reference-view image, 255 at the bottom-most pixels
   double baseline_m = 0.0;
   double view_scale = 1.0;     // the views' size and focal length relative to the options
+  // The ground sector of the reference view's columns that motion stereo matched: the others
+  // (a strip at either edge, where a match could fall outside the previous view) are not seen.
+  // Empty name when skipped.
+  Sector sector;
   std::vector<Detection> detections;   // source = the camera's name
 };
+
+// The sector, from `apex` on the ground (vehicle frame), of a view's columns [x_lo, x_hi] (its
+// bearings at the principal row), named `name`.
+Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
+                         double x_hi);
+// The columns [first, last] of a side view `width` pixels wide that motion stereo matches with
+// these stereo options (the left side's view is matched mirrored).
+std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo);
 
 class SideDetector {
  public:

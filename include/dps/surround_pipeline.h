@@ -35,9 +35,10 @@ struct PipelineOptions {
 // images (e.g. 200x100, f = 85 px, 32 disparities, 7x7 at the paper's 320x240).
 PipelineOptions DefaultPipelineOptions(const Rig& rig);
 
-// The ground sectors the pipeline's views cover (for the map and for dps-eval's field of view):
-// the front pair from the cameras' midpoint, beginning where both cameras' views overlap; each
-// side view from its camera.
+// The ground sectors the pipeline processes (for the map and for dps-eval's field of view): the
+// front pair from the cameras' midpoint, beginning where both cameras' views overlap; each side
+// view from its camera, over the columns motion stereo matches at the views' full size (a strip
+// at either edge is never matched: a match there could lie outside the previous view).
 Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& options);
 
 // One frame's input: both omni images and, for motion stereo, the vehicle's motion since the
@@ -55,6 +56,9 @@ struct FrameOutput {
   FrontResult front;
   SideResult left, right;
   std::vector<std::string> warnings;
+  // What this frame processed: the front pair's sector and each side's matched columns (none for a
+  // side skipped); the occupancy grid marks free space only there.
+  Coverage coverage;
   // Time spent per stage: the front pair's and both side pairs' work (the sources run
   // concurrently, so these may add up to more than detect_ms, their wall time).
   double front_ms = 0.0, sides_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
@@ -73,6 +77,7 @@ class SurroundPipeline {
   FrameOutput Process(const FrameInput& input, const std::vector<std::function<void()>>& alongside = {});
 
   const Rig& rig() const { return rig_; }
+  // The sectors the pipeline can process (PipelineCoverage): the map's shading, dps-eval's zone.
   const Coverage& coverage() const { return coverage_; }
 
  private:
