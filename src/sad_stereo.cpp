@@ -156,9 +156,9 @@ void LogPrefilterInto(const cv::Mat& grey, double sigma_px, double gain, int cap
 // window's mean horizontal change of the LoG image, |LoG(x + 1) - LoG(x - 1)|: zero in uniform
 // areas and along horizontal edges (where every disparity fits), large on texture. The window's
 // sum (exact, in 16 bits) is compared with threshold x area; the image's edges are replicated.
-// One pass of running sums (down the columns, then along the row) into `textured`, with the
-// change image in scratch: the same as cv::Sobel (dx 1, ksize 1), cv::convertScaleAbs,
-// cv::boxFilter (unnormalised) and cv::compare, which cost several times more on views this small.
+// Running sums down the columns and prefix sums along each row, into `textured`, with the change
+// image in `change`: the same as cv::Sobel (dx 1, ksize 1), cv::convertScaleAbs, cv::boxFilter
+// (unnormalised) and cv::compare, which cost several times more on views this small.
 void TextureMaskInto(const cv::Mat& log, const StereoOptions& o, cv::Mat& change, cv::Mat& textured) {
   CV_Assert(log.type() == CV_8U);
   const int w = log.cols, h = log.rows, rw = o.block_width / 2, rh = o.block_height / 2;
