@@ -5,6 +5,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <utility>
 
 #include <opencv2/imgproc.hpp>
 
@@ -167,7 +168,9 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
   }
   for (;;) {
     size_t bi = 0, bj = 0;
-    double best = std::numeric_limits<double>::infinity();
+    // Parts of different sources first (each source has kept its own parts apart), then the
+    // smallest union: (same source, length), lowest first.
+    std::pair<bool, double> best{true, std::numeric_limits<double>::infinity()};
     for (size_t i = 0; i < d.size(); ++i) {
       for (size_t j = i + 1; j < d.size(); ++j) {
         if (d[i].frame != d[j].frame || (across_sources_only && d[i].source == d[j].source)) continue;
@@ -177,15 +180,16 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
         }
         const cv::RotatedRect box = cv::minAreaRect(points);
         const double length = std::max(box.size.width, box.size.height), width = std::min(box.size.width, box.size.height);
-        if (length > max_length_m || width > max_width_m || length >= best) continue;
+        const std::pair<bool, double> key{d[i].source == d[j].source, length};
+        if (length > max_length_m || width > max_width_m || !(key < best)) continue;
         const auto source = sightings.find(d[i].source);
         if (d[i].source == d[j].source && source != sightings.end() && SeenBetween(d[i], d[j], source->second)) continue;
-        best = length;
+        best = key;
         bi = i;
         bj = j;
       }
     }
-    if (!std::isfinite(best)) break;
+    if (!std::isfinite(best.second)) break;
     d[bi] = Merged(d[bi], d[bj]);
     d.erase(d.begin() + static_cast<std::ptrdiff_t>(bj));
   }
