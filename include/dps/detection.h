@@ -49,8 +49,8 @@ std::vector<Detection> FuseDetections(const std::vector<Detection>& detections, 
 // rectangle around their points no longer than max_length_m and no wider than max_width_m),
 // parts of different sources first (each source has kept its own parts apart), then the smallest
 // union, until no pair fits: a car seen partly by a side camera and partly by the front pair, with
-// the stretch between unseen. `across_sources_only`: only parts from different
-// sources. Ids are renumbered per source.
+// the stretch between unseen. `across_sources_only`: only parts from different sources. Ids are
+// renumbered per source.
 // `viewpoints` (optional, by source): two parts of one source are not merged when that source
 // saw through the stretch between them (points of the source behind it on the same bearings).
 std::vector<Detection> MergeVehicleParts(std::vector<Detection> detections, double max_length_m, double max_width_m,
