@@ -154,10 +154,9 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
   const SadStereoMatcher& matcher = *by_left_.matcher;  // Prepare is const: safe from both
   cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
-      if (i == 0) left_->Render(GreyImage(left_omni), r.left_view);
-      if (i == 0) matcher.Prepare(r.left_view, &left_prepared_);
-      if (i == 1) right_->Render(GreyImage(right_omni), r.right_view);
-      if (i == 1) matcher.Prepare(r.right_view, &right_prepared_);
+      cv::Mat& view = i == 0 ? r.left_view : r.right_view;
+      (i == 0 ? *left_ : *right_).Render(GreyImage(i == 0 ? left_omni : right_omni), view);
+      matcher.Prepare(view, i == 0 ? &left_prepared_ : &right_prepared_);
     }
   });
   // Drift: measure the rows' misalignment now and then, and rebuild the right view to cancel it.

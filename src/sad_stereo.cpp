@@ -367,8 +367,8 @@ void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view) const {
     view->textured[1].release();
     return;
   }
-  cv::pyrDown(grey, view->scratch[4]);
-  LogPrefilterInto(view->scratch[4], o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[1]);
+  cv::pyrDown(grey, view->scratch[3]);
+  LogPrefilterInto(view->scratch[3], o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[1]);
   TextureMaskInto(view->log[1], o, view->scratch[0], view->textured[1]);
 }
 

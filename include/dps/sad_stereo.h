@@ -88,7 +88,7 @@ class SadStereoMatcher {
   struct PreparedView {
     cv::Mat log[2];       // the LoG image, full and (two levels) half resolution
     cv::Mat textured[2];  // the interest operator's mask (255: textured window)
-    cv::Mat scratch[5];   // working memory, kept between calls
+    cv::Mat scratch[4];   // working memory, kept between calls
   };
   // Prefilters a grey or BGR image into `view` (its buffers reused). Const: concurrent calls on
   // one matcher are safe.
