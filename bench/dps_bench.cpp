@@ -18,15 +18,15 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "dps/occupancy_grid.h"
-#include "dps/rig_io.h"
-#include "dps/sad_stereo.h"
-#include "dps/scene_io.h"
-#include "dps/scene_renderer.h"
-#include "dps/surround_map.h"
-#include "dps/surround_pipeline.h"
-#include "dps/tracker.h"
-#include "dps/virtual_view.h"
+#include "dps/map/occupancy_grid.h"
+#include "dps/camera/rig_io.h"
+#include "dps/stereo/sad_stereo.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
+#include "dps/map/surround_map.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/map/tracker.h"
+#include "dps/stereo/virtual_view.h"
 
 namespace {
 

@@ -8,12 +8,12 @@
 #include <vector>
 
 #include "check.h"
-#include "dps/auto_marks.h"
-#include "dps/error.h"
-#include "dps/scene_io.h"
-#include "dps/scene_renderer.h"
-#include "dps/synth.h"
-#include "dps/vanishing_points.h"
+#include "dps/calib/auto_marks.h"
+#include "dps/util/error.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
+#include "dps/synth/synth.h"
+#include "dps/calib/vanishing_points.h"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "check.h"
-#include "dps/camera_model.h"
+#include "dps/camera/camera_model.h"
 
 namespace {
 

@@ -10,15 +10,15 @@
 #include <opencv2/imgproc.hpp>
 
 #include "check.h"
-#include "dps/disparity_histogram.h"
-#include "dps/error.h"
-#include "dps/evaluation.h"
-#include "dps/front_detection.h"
-#include "dps/rig_io.h"
-#include "dps/sad_stereo.h"
-#include "dps/scene_io.h"
-#include "dps/surround_pipeline.h"
-#include "dps/synth.h"
+#include "dps/detect/disparity_histogram.h"
+#include "dps/util/error.h"
+#include "dps/eval/evaluation.h"
+#include "dps/detect/front_detection.h"
+#include "dps/camera/rig_io.h"
+#include "dps/stereo/sad_stereo.h"
+#include "dps/synth/scene_io.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/synth/synth.h"
 
 namespace {
 

@@ -8,12 +8,12 @@
 #include <opencv2/videoio.hpp>
 
 #include "check.h"
-#include "dps/csv.h"
-#include "dps/drive_io.h"
-#include "dps/drive_processing.h"
-#include "dps/error.h"
-#include "dps/scene_io.h"
-#include "dps/synth.h"
+#include "dps/util/csv.h"
+#include "dps/pipeline/drive_io.h"
+#include "dps/pipeline/drive_processing.h"
+#include "dps/util/error.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/synth.h"
 
 namespace {
 

@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "check.h"
-#include "dps/occupancy_grid.h"
-#include "dps/scene_io.h"
-#include "dps/scene_renderer.h"
-#include "dps/error.h"
-#include "dps/surround_pipeline.h"
-#include "dps/synth.h"
-#include "dps/truth.h"
+#include "dps/map/occupancy_grid.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
+#include "dps/util/error.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/synth/synth.h"
+#include "dps/synth/truth.h"
 
 namespace {
 

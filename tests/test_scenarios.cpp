@@ -16,15 +16,15 @@
 #include <string>
 
 #include "check.h"
-#include "dps/detection.h"
-#include "dps/drive_processing.h"
-#include "dps/evaluation.h"
-#include "dps/rig_io.h"
-#include "dps/scene_io.h"
-#include "dps/surround_pipeline.h"
-#include "dps/synth.h"
-#include "dps/tracker.h"
-#include "dps/truth.h"
+#include "dps/detect/detection.h"
+#include "dps/pipeline/drive_processing.h"
+#include "dps/eval/evaluation.h"
+#include "dps/camera/rig_io.h"
+#include "dps/synth/scene_io.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/synth/synth.h"
+#include "dps/map/tracker.h"
+#include "dps/synth/truth.h"
 
 namespace {
 

@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "check.h"
-#include "dps/scene_io.h"
-#include "dps/scene_renderer.h"
-#include "dps/side_detection.h"
-#include "dps/surround_pipeline.h"
-#include "dps/synth.h"
-#include "dps/truth.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
+#include "dps/detect/side_detection.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/synth/synth.h"
+#include "dps/synth/truth.h"
 
 namespace {
 

@@ -15,9 +15,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "check.h"
-#include "dps/disparity_io.h"
-#include "dps/error.h"
-#include "dps/sad_stereo.h"
+#include "dps/stereo/disparity_io.h"
+#include "dps/util/error.h"
+#include "dps/stereo/sad_stereo.h"
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "check.h"
-#include "dps/surround_map.h"
+#include "dps/map/surround_map.h"
 
 namespace {
 

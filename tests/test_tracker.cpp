@@ -8,9 +8,9 @@
 #include <random>
 
 #include "check.h"
-#include "dps/detection.h"
-#include "dps/error.h"
-#include "dps/tracker.h"
+#include "dps/detect/detection.h"
+#include "dps/util/error.h"
+#include "dps/map/tracker.h"
 
 namespace {
 

@@ -10,10 +10,10 @@
 #include <Eigen/Geometry>
 
 #include "check.h"
-#include "dps/error.h"
-#include "dps/scene_io.h"
-#include "dps/synth.h"
-#include "dps/vanishing_points.h"
+#include "dps/util/error.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/synth.h"
+#include "dps/calib/vanishing_points.h"
 
 namespace {
 

@@ -13,11 +13,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "check.h"
-#include "dps/rig_io.h"
-#include "dps/sad_stereo.h"
-#include "dps/scene_io.h"
-#include "dps/scene_renderer.h"
-#include "dps/virtual_view.h"
+#include "dps/camera/rig_io.h"
+#include "dps/stereo/sad_stereo.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
+#include "dps/stereo/virtual_view.h"
 
 namespace {
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "dps/error.h"
+#include "dps/util/error.h"
 
 namespace dps_cli {
 

@@ -10,9 +10,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli.h"
-#include "dps/auto_marks.h"
-#include "dps/rig_io.h"
-#include "dps/vanishing_points.h"
+#include "dps/calib/auto_marks.h"
+#include "dps/camera/rig_io.h"
+#include "dps/calib/vanishing_points.h"
 
 namespace {
 

@@ -3,11 +3,11 @@
 #include <iostream>
 
 #include "cli.h"
-#include "dps/atomic_file.h"
-#include "dps/evaluation.h"
-#include "dps/rig_io.h"
-#include "dps/surround_pipeline.h"
-#include "dps/tracker.h"
+#include "dps/util/atomic_file.h"
+#include "dps/eval/evaluation.h"
+#include "dps/camera/rig_io.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/map/tracker.h"
 
 namespace {
 

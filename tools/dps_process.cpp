@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "cli.h"
-#include "dps/drive_processing.h"
+#include "dps/pipeline/drive_processing.h"
 
 namespace {
 

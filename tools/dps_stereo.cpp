@@ -5,9 +5,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli.h"
-#include "dps/atomic_file.h"
-#include "dps/disparity_io.h"
-#include "dps/sad_stereo.h"
+#include "dps/util/atomic_file.h"
+#include "dps/stereo/disparity_io.h"
+#include "dps/stereo/sad_stereo.h"
 
 namespace {
 

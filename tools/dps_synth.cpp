@@ -6,8 +6,8 @@
 #include <iostream>
 
 #include "cli.h"
-#include "dps/scene_io.h"
-#include "dps/synth.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/synth.h"
 
 namespace {
 

@@ -1,7 +1,7 @@
 // Uses the installed dps: builds a camera, projects a point and unprojects it again.
 #include <cstdio>
 
-#include "dps/camera_model.h"
+#include "dps/camera/camera_model.h"
 
 int main() {
   Eigen::Matrix3d K;

@@ -1,0 +1,159 @@
+// dps — obstacles at the sides by motion stereo (Gandhi & Trivedi 2006, section V-B, eq. 17-18).
+//
+// One camera's side views of two consecutive frames form the stereo pair; the camera moved
+// between them by the ego motion (from CAN speed and yaw rate). Both views lie in the vertical
+// plane parallel to that displacement (section V-C: turning), so they are rectified with the
+// displacement as baseline. Static things then have disparity f B / depth; vehicles moving with
+// us have less, overtaking ones negative disparity, hence a disparity range shifted below zero
+// (the paper's fixed offset). The road's disparity at every pixel follows from the geometry; the
+// score counts distance from it in either direction. Column histograms give the components;
+// each component's pixels are traced back in the disparity image and, per column, the
+// bottom-most one is taken as the object's contact with the ground: its ray meets the road
+// plane (eq. 17-18, from the real view geometry). Points are reported in the vehicle frame of the
+// current frame.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dps/detect/detection.h"
+#include "dps/detect/disparity_histogram.h"
+#include "dps/camera/ego_motion.h"
+#include "dps/eval/evaluation.h"
+#include "dps/camera/rig.h"
+#include "dps/stereo/sad_stereo.h"
+#include "dps/stereo/virtual_view.h"
+
+namespace dps {
+
+struct SideDetectorOptions {
+  int view_width = 400;        // side view size, px
+  int view_height = 200;
+  double focal_px = 170.0;
+  // The horizon's row as a fraction of the height: below it the view reaches 37 degrees down at
+  // the defaults, so a camera 0.9 m high sees where objects 1.2 m away meet the road.
+  double horizon_fraction = 0.35;
+  StereoOptions stereo;        // default: 64 disparities from -16 (overtaking vehicles)
+  HistogramOptions histogram;  // its range is the stereo range; scored two-sided
+  double max_range_m = 40.0;   // points farther than this are dropped
+  // ... and points deeper than this along the view's axis: motion stereo's depth error grows with
+  // depth squared over f B (about 0.8 m at 6 m, 7 m/s, 15 fps, 640x480), m
+  double max_depth_m = 6.0;
+  double own_car_height_m = 0.9;
+  double min_baseline_m = 0.05;       // camera displacement below this: no motion stereo
+  double min_obstacle_height_m = 0.5; // components lower than this (median) are dropped
+  // Below the bottom-most matched pixel, pixels with no disparity (up to this height at the
+  // object's depth) or with the object's disparity (within the tolerance) still count as the
+  // object: the contact with the road is the lowest of them.
+  // At speed the camera moves far between frames, and a static object beside the car has the
+  // disparity f B / D (D: its distance from the camera across the view). To keep objects down to
+  // min_static_distance_m inside the disparity range, the views shrink (focal length and size
+  // together, so the field of view stays) by f B / D <= the range's upper end, in steps of 1/16
+  // and not below min_view_scale.
+  double min_static_distance_m = 1.0;
+  double min_view_scale = 0.5;
+  // Columns whose depth times disparity differs from the component's median by more than this
+  // fraction are dropped (see side_detection.cpp), unless the component's median |disparity| is
+  // below min_motion_disparity_px.
+  double motion_tolerance = 0.35;
+  double min_motion_disparity_px = 3.0;
+  // A column whose contact lies farther than this from both neighbouring columns' contacts on
+  // the ground is dropped: its bottom-most pixel was a stray match, not where the object meets the
+  // road. The depth x disparity test above cannot catch it for objects keeping pace with us
+  // (disparity near zero), and one such point 3 m short becomes the detection's nearest point.
+  // m, > 0.
+  double max_contact_jump_m = 1.0;
+  double disparity_sigma_px = 1.0;    // matching noise, for the velocity's uncertainty
+  double max_gap_below_m = 0.6;
+  double contact_tolerance_px = 1.5;
+  // Block matching carries the object's disparity up to half a window below its bottom edge
+  // (vertical foreground fattening): the contact is taken this many rows above the lowest pixel,
+  // >= 0. DefaultPipelineOptions: 2 with 9x9 windows (measured: the rendered cars' sides came
+  // out 0.1-0.2 m too close at 640x480), 0 with 7x7 (no such bias at 320x240).
+  int contact_trim_rows = 0;
+  // An object keeping pace with us (|disparity| below min_motion_disparity_px) over road whose
+  // disparity at the contact differs from the object's by more than this: the windows carry the
+  // object's disparity down over the road by up to half a window (measured: a car pacing us at
+  // 6-7 m in a turn was placed 1-1.5 m short), so the contact is taken half a window above the
+  // lowest pixel. px, > 0.
+  double pacing_road_contrast_px = 5.0;
+
+  SideDetectorOptions();
+};
+
+struct SideResult {
+  bool skipped = false;        // no motion stereo this frame (see reason)
+  std::string reason;
+  cv::Mat reference_view, other_view;  // the pair as matched (reference = left image)
+  cv::Mat disparity, score, histogram;
+  cv::Mat obstacle;            // CV_8U reference-view image, 255 at the bottom-most pixels
+  double baseline_m = 0.0;
+  double view_scale = 1.0;     // the views' size and focal length relative to the options
+  // The ground sector of the reference view's columns that motion stereo matched: the others
+  // (a strip at either edge, where a match could fall outside the previous view) are not seen.
+  // Empty name when skipped.
+  Sector sector;
+  std::vector<Detection> detections;   // source = the camera's name
+};
+
+// The sector, from `apex` on the ground (vehicle frame), of a view's columns [x_lo, x_hi] (its
+// bearings at the principal row), named `name`.
+Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
+                         double x_hi);
+// The columns [first, last] of a side view `width` pixels wide that motion stereo matches with
+// these stereo options (the left side's view is matched mirrored).
+std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo);
+
+class SideDetector {
+ public:
+  // `camera`: the rig camera looking to `side` ("left" camera, Side::kLeft, usually).
+  SideDetector(const Rig& rig, const std::string& camera, Side side, const SideDetectorOptions& options);
+  ~SideDetector();
+
+  // Detects obstacles from the previous and the current omni image of the camera;
+  // `current_in_previous` is the vehicle's pose at the current frame in the previous frame's
+  // vehicle frame (MotionProfile::Integrate over the frame interval).
+  // `interval_s` > 0 (the time between the frames): each detection also carries its ground
+  // velocity along the camera's displacement (Detection::has_motion): a rigid object has depth x
+  // disparity = f x (the camera's displacement relative to it) in every column, so its own
+  // displacement is the camera's minus the median of depth x disparity / f.
+  // `continuing`: previous_omni is the current_omni of the last call (consecutive frames); the
+  // previous view is then the last call's current view whenever the two views are the same (same
+  // scale and yaw, e.g. driving straight), and is taken as it was rendered and prefiltered then.
+  SideResult Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
+                    const PlanarPose& current_in_previous, double interval_s = 0.0, bool continuing = false);
+  size_t views_reused() const { return views_reused_; }  // calls that took the last current view
+
+ private:
+  RigCamera camera_;
+  Side side_;
+  Vehicle vehicle_;
+  SideDetectorOptions options_;
+  // Per view (by yaw grid index): pixels to ignore (no source, own car) and the inverse depth of
+  // the road along the view axis (0 where there is no road); the road's disparity is f B times it.
+  struct ViewGeometry {
+    cv::Mat ignore, inverse_depth;
+  };
+  const ViewGeometry& Geometry(const VirtualView& view, std::pair<int, long> key);
+  // The view scale for a baseline, in sixteenths.
+  int ScaleSixteenths(double baseline_m) const;
+  SideViewCache& Views(int sixteenths);
+  std::map<std::pair<int, long>, ViewGeometry> geometry_;   // by (scale, yaw grid index)
+  std::map<int, std::unique_ptr<SideViewCache>> views_;     // by scale
+  std::unique_ptr<SadStereoMatcher> matcher_;
+  // The last call's current view as matched (rendered; prefiltered, mirrored for the left side)
+  // and its (scale, yaw grid index); valid only after a call that matched. `prepared_` is the
+  // current view's buffer of the next call.
+  cv::Mat last_view_;
+  SadStereoMatcher::PreparedView last_prepared_, prepared_;
+  std::pair<int, long> last_key_{0, 0};
+  bool last_valid_ = false;
+  size_t views_reused_ = 0;
+};
+
+}  // namespace dps

@@ -1,0 +1,123 @@
+// dps — scoring detections against ground truth (DESIGN.md §5), as dps-eval and the regression
+// tests do.
+//
+// Per frame, a truth object counts when its near point (the footprint point nearest to the
+// vehicle origin) lies within max_range_m and inside the processed field of view (Coverage); a
+// detection is in the zone under the same rule for its (x, z). A detection matches an object when
+// its (x, z) lies within max(0.75 m, 0.1 * range of the object's near point) of the footprint
+// (0 inside); pairs are taken nearest first, each object and each detection at most once: first
+// with the counted objects, then what is left with the objects that do not count (their near point
+// outside the zone, the rest of them partly inside it) — a detection of such an object is a true
+// one, though the object is not counted for recall. Counted objects still unmatched are then
+// matched with the detections outside the zone: §5 matches detections and objects regardless of
+// the zone (a car whose near point is 19.5 m away, detected at 20.3 m, is found); such detections
+// are not counted for precision.
+// recall = matched counted objects / counted objects; precision = matched detections / detections
+// in the zone; range error = |detection range - near-point range| of the counted matches, per band
+// of the near point's range.
+//
+// Field of view: what the pipeline processes is sectors on the ground, each an apex (the
+// viewpoint, or the front pair's midpoint), a direction and a half-angle (for the front pair atan
+// of half the view width over the focal length, beginning ahead of its apex where both views
+// overlap; for a side view the span of the columns motion stereo matches). Without a coverage
+// every direction counts.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "dps/detect/detection.h"
+#include "dps/synth/truth.h"
+
+namespace dps {
+
+struct Sector {
+  std::string name;               // "front", "left", "right"
+  Eigen::Vector2d apex{0, 0};     // where the source looks from, vehicle frame (x, z)
+  double direction_rad = 0.0;     // from +Z towards +X
+  double half_angle_rad = 0.0;
+  // The sector begins this far ahead of the apex along its direction, at its vertex: a stereo
+  // pair sees only where both views overlap, from where their inner edges cross.
+  double start_m = 0.0;
+  Eigen::Vector2d Vertex() const;
+  bool Contains(const Eigen::Vector2d& point) const;
+};
+
+struct Coverage {
+  std::vector<Sector> sectors;  // empty = everything
+  bool Contains(const Eigen::Vector2d& point) const;
+};
+
+struct EvaluationOptions {
+  double max_range_m = 20.0;   // > 0
+  Coverage coverage;
+};
+
+struct BandScore {
+  std::string name;            // "0-10", ...
+  double lo_m = 0, hi_m = 0;
+  int objects = 0, matched_objects = 0;
+  int detections = 0, matched_detections = 0;
+  std::vector<double> range_errors_m;
+  double Recall() const;       // 1 when there is no object
+  double Precision() const;    // 1 when there is no detection
+  double MedianRangeError() const;  // NaN when no match
+  double RangeErrorP90() const;
+  double MedianRelativeRangeError() const;  // |error| / object range, NaN when no match
+  std::vector<double> relative_errors;
+  std::vector<double> velocity_errors_mps;  // |v_detection - v_truth| of matches with a velocity
+  double MedianVelocityError() const;       // NaN when none
+};
+
+struct SourceScore {
+  std::string source;
+  int detections = 0, matched = 0;  // in the zone
+  double Precision() const;
+};
+
+// One scoring error, for finding out why: a counted object no detection matched, or a detection
+// in the zone that matched no object.
+struct ScoringError {
+  int frame = 0;
+  bool missed = false;        // true: a missed object; false: a false detection
+  int object_id = -1;         // missed: the truth id
+  std::string kind;           // missed: the truth kind; false: the detection's source
+  Eigen::Vector2d point{0, 0};  // missed: the near point; false: the detection's (x, z)
+  double range_m = 0.0;
+};
+
+struct EvaluationResult {
+  BandScore overall;                 // all objects / detections in the zone
+  std::vector<BandScore> bands;      // 0-10, 10-20, 20-30, 30-50 m (object near-point range)
+  std::vector<SourceScore> sources;  // front, left, right
+  int frames = 0;                    // frames with truth rows or detections
+  int frames_with_detections = 0;    // frames with at least one detection in the zone
+  std::vector<ScoringError> errors;  // by frame: missed objects, then false detections
+};
+
+// Scores detections against truth (frames matched by index).
+EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
+                          const EvaluationOptions& options);
+
+// Tracks scored like detections (DESIGN.md §5: the same matching on (x, z)), with the velocity
+// error |v_track - v_truth| of each match; also counts identity switches: a truth object matched
+// by a different track id than in its previous matched frame.
+struct TrackEvaluation {
+  EvaluationResult positions;
+  int id_switches = 0;
+  int objects_tracked = 0;   // truth ids matched at least once
+};
+struct TrackState;
+TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std::vector<TruthRow>& truth,
+                               const EvaluationOptions& options);
+
+// A table for people (per band and per source) and a JSON document for scripts.
+std::string EvaluationTable(const EvaluationResult& result);
+std::string EvaluationJson(const EvaluationResult& result);
+// The scoring errors as CSV: frame,error,id,kind,x,z,range (error "missed" with the object's id,
+// kind and near point, or "false" with the detection's source as kind, id -1, and its point).
+std::string ScoringErrorsCsv(const EvaluationResult& result);
+
+}  // namespace dps

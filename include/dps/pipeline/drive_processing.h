@@ -1,0 +1,58 @@
+// dps — processing one recorded drive into detections.csv, tracks.csv, the surround-map video
+// and summary.json (what dps-process does for each drive).
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "dps/pipeline/drive_io.h"
+#include "dps/map/occupancy_grid.h"
+#include "dps/map/surround_map.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/map/tracker.h"
+
+namespace dps {
+
+struct DriveOptions {
+  bool default_pipeline = true;   // DefaultPipelineOptions(rig) instead of `pipeline`
+  PipelineOptions pipeline;
+  CanLogFormat can;
+  double image_fps = 30.0;        // frame rate of image folders without frames.csv, > 0
+  bool map_video = true;          // map.avi (MJPG)
+  bool map_png = false;           // map/NNNNNN.png
+  bool diagnostics = false;       // diagnostics.avi: six panels per source (DrawDiagnostics)
+  MapOptions map;
+  TrackerOptions tracker;
+  OccupancyOptions occupancy;
+  bool truncate = false;          // left and right with different frame counts: use the shorter
+};
+
+struct DriveSummary {
+  std::string drive;              // the drive folder's name
+  std::string output_dir;
+  int frames = 0;
+  int frames_without_motion = 0;  // side detection skipped for them
+  int detections = 0;
+  double front_vertical_offset_px = 0.0;  // drift correction of the front pair at the end
+  std::string map_video;          // the map video's file name and codec ("map.mp4 (H.264)"); "" = none
+  std::vector<std::string> warnings;
+  std::map<std::string, double> stage_seconds;  // decode, front, sides, map, write
+  double seconds = 0.0;
+  double frames_per_second = 0.0;
+  std::string ToJson() const;
+};
+
+// The folder a drive's outputs go to: <out_root>/<drive folder name>.
+std::string DriveOutputDir(const std::string& drive_dir, const std::string& out_root);
+// True when that folder holds a complete run (summary.json is written last).
+bool DriveOutputComplete(const std::string& output_dir);
+
+// Processes a drive; the outputs are built in a temporary folder and renamed into place when
+// complete (an existing output folder is replaced). `progress(done, total)` is called after each
+// frame. Throws dps::Error (naming the drive's file) for bad input.
+DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_root, const DriveOptions& options,
+                          const std::function<void(int, int)>& progress = nullptr);
+
+}  // namespace dps

@@ -1,0 +1,95 @@
+// dps — one frame of the Dynamic Panoramic Surround map (Gandhi & Trivedi 2006, section V-C):
+// front obstacles by binocular stereo, left and right obstacles by motion stereo, all on the
+// ground plane of the current vehicle frame.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dps/eval/evaluation.h"
+#include "dps/detect/front_detection.h"
+#include "dps/detect/side_detection.h"
+
+namespace dps {
+
+struct PipelineOptions {
+  FrontDetectorOptions front;
+  SideDetectorOptions side;
+  bool sides = true;           // run motion stereo on the side views
+  double merge_distance_m = 1.5;  // detections this close are one object (FuseDetections)
+  // Then parts that fit into one vehicle's footprint are one object (MergeVehicleParts);
+  // vehicle_length_m = 0: no such merging.
+  double vehicle_length_m = 5.5;
+  double vehicle_width_m = 2.2;
+  bool vehicle_across_sources_only = false;
+};
+
+// Options scaled to the rig's image size: at 640 px wide omni images, 400x200 views with a focal
+// length of 170 px (about the omni image's own resolution near the horizon), 64 disparities and
+// 9x9 windows; proportionally smaller views, ranges (multiples of 16) and windows for smaller
+// images (e.g. 200x100, f = 85 px, 32 disparities, 7x7 at the paper's 320x240).
+PipelineOptions DefaultPipelineOptions(const Rig& rig);
+
+// The ground sectors the pipeline processes (for the map and for dps-eval's field of view): the
+// front pair from the cameras' midpoint, beginning where both cameras' views overlap; each side
+// view from its camera, over the columns motion stereo matches at the views' full size (a strip
+// at either edge is never matched: a match there could lie outside the previous view).
+Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& options);
+
+// One frame's input: both omni images and, for motion stereo, the vehicle's motion since the
+// previous frame (unknown for the first frame, or when the CAN log has no data for it).
+struct FrameInput {
+  int frame = 0;
+  double t_s = 0.0;
+  cv::Mat left, right;
+  bool motion_known = false;
+  PlanarPose current_in_previous;  // vehicle pose now, in the previous frame's vehicle frame
+};
+
+struct FrameOutput {
+  std::vector<Detection> detections;  // all sources, frame and t filled in
+  FrontResult front;
+  SideResult left, right;
+  std::vector<std::string> warnings;
+  // What this frame processed: the front pair's sector and each side's matched columns (none for a
+  // side skipped); the occupancy grid marks free space only there.
+  Coverage coverage;
+  // Time spent per stage: the front pair's and both side pairs' work (the sources run
+  // concurrently, so these may add up to more than detect_ms, their wall time).
+  double front_ms = 0.0, sides_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
+};
+
+class SurroundPipeline {
+ public:
+  SurroundPipeline(const Rig& rig, const PipelineOptions& options);
+  ~SurroundPipeline();
+
+  // Processes the next frame (frames must come in order; the previous images are kept for
+  // motion stereo). `alongside` (optional): work that runs concurrently with the frame's stereo,
+  // each function as its own task — e.g. the previous frame's tracking and map, or decoding the
+  // next frame, which do not depend on this frame. All of it is done when Process returns; the
+  // first exception from it or from a source is rethrown here.
+  FrameOutput Process(const FrameInput& input, const std::vector<std::function<void()>>& alongside = {});
+
+  const Rig& rig() const { return rig_; }
+  // The sectors the pipeline can process (PipelineCoverage): the map's shading, dps-eval's zone.
+  const Coverage& coverage() const { return coverage_; }
+
+ private:
+  Rig rig_;
+  PipelineOptions options_;
+  Coverage coverage_;
+  std::map<std::string, Eigen::Vector2d> viewpoints_;
+  std::unique_ptr<FrontDetector> front_;
+  std::unique_ptr<SideDetector> left_, right_;
+  cv::Mat previous_left_, previous_right_;  // the previous frame's omni images, grey
+  double previous_t_s_ = 0.0;
+  bool sides_last_ = false;  // the side detectors ran on the previous frame (Detect's `continuing`)
+};
+
+}  // namespace dps

@@ -1,0 +1,95 @@
+// dps — synthetic scenes: what dps-synth renders (docs/synth.md describes the file format).
+//
+// A scene is a rig driving over a textured ground plane with lane markings, among box-shaped
+// objects (cars, trucks, poles, walls, pedestrians) that move with their own speed / yaw-rate
+// profiles. A calibration scene is a parked rig in a parking lot with painted lines along the
+// vehicle's Z and X axes and vertical poles. World frame = vehicle frame at t = 0 (see
+// ego_motion.h for the planar conventions).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "dps/camera/ego_motion.h"
+#include "dps/camera/rig.h"
+
+namespace dps {
+
+// Lane markings on a straight road along the world's Z axis.
+struct RoadMarkings {
+  bool enabled = true;
+  double lane_width_m = 3.5;        // > 0
+  int lanes_left = 1;               // lanes left of the ego lane, >= 0
+  int lanes_right = 1;              // lanes right of the ego lane, >= 0
+  double ego_lane_center_x_m = 0.0; // world x of the ego lane's centre
+  double marking_width_m = 0.15;    // > 0
+  double dash_length_m = 3.0;       // > 0; lines between lanes are dashed, road edges solid
+  double dash_gap_m = 6.0;          // >= 0
+};
+
+// A box-shaped object standing on the ground.
+struct SceneObject {
+  int id = 1;                  // >= 1, unique; truth.csv's id
+  std::string kind = "car";    // car | truck | pole | wall | pedestrian (texture and truth kind)
+  double length_m = 4.5;       // along its heading, > 0
+  double width_m = 1.8;        // across, > 0
+  double height_m = 1.5;       // > 0
+  PlanarPose start;            // centre of the footprint and heading at t = 0, world frame
+  MotionProfile motion;        // speed along the heading and yaw rate over time
+  double brightness = 0.6;     // body colour brightness (0, 1]
+  int colour = 0;              // palette index for the body colour
+
+  // Footprint centre and heading at time t_s, world frame.
+  PlanarPose PoseAt(double t_s) const { return motion.Integrate(start, 0.0, t_s); }
+};
+
+// A straight painted line on the ground (calibration scenes), parallel to a vehicle axis.
+struct PaintedLine {
+  char axis = 'Z';               // 'X' or 'Z': the vehicle axis the line is parallel to
+  Eigen::Vector2d from_xz{0, 0}; // end points on the ground, world (x, z), metres
+  Eigen::Vector2d to_xz{0, 0};
+  double width_m = 0.12;         // > 0
+};
+
+// How images are rendered.
+struct RenderOptions {
+  int supersample = 2;        // samples per pixel along each axis, 1..8 (anti-aliasing)
+  double noise_sigma = 2.0;   // Gaussian image noise, grey levels, >= 0
+  double blur_sigma_px = 0.0; // Gaussian blur after rendering, pixels, >= 0 (0 = none)
+};
+
+// Calibration-scene settings (kind == kCalibration).
+struct CalibrationSettings {
+  double mark_noise_px = 0.5;     // Gaussian noise added to each mark, pixels, >= 0
+  double mark_spacing_m = 0.5;    // spacing of sampled points along a line, metres, > 0
+  double min_rotation_deg = 1.0;  // the true rig = nominal rig rotated by a random angle
+  double max_rotation_deg = 3.0;  //   in [min, max] about a random axis, per camera
+};
+
+enum class SceneKind { kDrive, kCalibration };
+
+struct Scene {
+  std::string name = "scene";
+  SceneKind kind = SceneKind::kDrive;
+  Rig rig;                         // the rig that renders (for calibration: the nominal rig)
+  double fps = 15.0;               // frames per second, > 0
+  double duration_s = 3.0;         // > 0; frames = round(duration * fps) (at least 1)
+  std::uint64_t seed = 1;          // textures, noise, calibration perturbations
+  RenderOptions render;
+  MotionProfile ego;               // the vehicle's speed / yaw rate
+  RoadMarkings road;
+  std::vector<SceneObject> objects;
+  std::vector<PaintedLine> lines;  // calibration: painted lines
+  CalibrationSettings calibration;
+
+  int FrameCount() const;
+  double FrameTime(int frame) const { return frame / fps; }
+  // The vehicle's pose in the world at time t_s (world = vehicle frame at t = 0).
+  PlanarPose EgoPoseAt(double t_s) const { return ego.Integrate(PlanarPose{}, 0.0, t_s); }
+};
+
+// Resizes every camera of the scene's rig to width x height (ResizeCameraModel).
+void ResizeScene(Scene* scene, int width, int height);
+
+}  // namespace dps

@@ -1,0 +1,239 @@
+#include "dps/detect/detection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <utility>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dps/util/atomic_file.h"
+#include "dps/util/csv.h"
+#include "dps/util/error.h"
+
+namespace dps {
+
+Detection DetectionFromPoints(const std::vector<Eigen::Vector2d>& points, const std::string& source) {
+  Detection d;
+  d.source = source;
+  d.points = points;
+  d.n_points = static_cast<int>(points.size());
+  d.x_min_m = d.z_min_m = std::numeric_limits<double>::infinity();
+  d.x_max_m = d.z_max_m = -std::numeric_limits<double>::infinity();
+  d.range_m = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector2d& p : points) {
+    d.x_min_m = std::min(d.x_min_m, p.x());
+    d.x_max_m = std::max(d.x_max_m, p.x());
+    d.z_min_m = std::min(d.z_min_m, p.y());
+    d.z_max_m = std::max(d.z_max_m, p.y());
+    const double r = p.norm();
+    if (r < d.range_m) {
+      d.range_m = r;
+      d.x_m = p.x();
+      d.z_m = p.y();
+    }
+  }
+  return d;
+}
+
+namespace {
+
+std::vector<Eigen::Vector2d> PointsOf(const Detection& d) {
+  return d.points.empty() ? std::vector<Eigen::Vector2d>{{d.x_m, d.z_m}} : d.points;
+}
+
+// One detection from two parts of the same frame: all points; the source of the part holding the
+// nearest point.
+Detection Merged(const Detection& a, const Detection& b) {
+  std::vector<Eigen::Vector2d> points = PointsOf(a);
+  const std::vector<Eigen::Vector2d> extra = PointsOf(b);
+  points.insert(points.end(), extra.begin(), extra.end());
+  Detection m = DetectionFromPoints(points, b.range_m < a.range_m ? b.source : a.source);
+  m.frame = a.frame;
+  m.t_s = a.t_s;
+  m.clipped_ends = a.clipped_ends;
+  m.clipped_ends.insert(m.clipped_ends.end(), b.clipped_ends.begin(), b.clipped_ends.end());
+  // The motion measurement of the part with more points (only motion stereo has one).
+  const Detection* motion = a.has_motion && (!b.has_motion || a.n_points >= b.n_points) ? &a : b.has_motion ? &b : nullptr;
+  if (motion) {
+    m.has_motion = true;
+    m.motion_direction = motion->motion_direction;
+    m.motion_mps = motion->motion_mps;
+    m.motion_sigma_mps = motion->motion_sigma_mps;
+  }
+  return m;
+}
+
+// Ids numbered per frame and source.
+void Renumber(std::vector<Detection>* d) {
+  std::map<std::pair<int, std::string>, int> next_id;
+  for (Detection& e : *d) e.id = next_id[{e.frame, e.source}]++;
+}
+
+}  // namespace
+
+std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double merge_distance_m) {
+  const size_t n = in.size();
+  std::vector<size_t> parent(n);
+  for (size_t i = 0; i < n; ++i) parent[i] = i;
+  std::function<size_t(size_t)> root = [&](size_t i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      if (in[i].frame != in[j].frame) continue;
+      bool close = false;
+      for (const Eigen::Vector2d& a : PointsOf(in[i])) {
+        for (const Eigen::Vector2d& b : PointsOf(in[j])) {
+          if ((a - b).norm() <= merge_distance_m) {
+            close = true;
+            break;
+          }
+        }
+        if (close) break;
+      }
+      if (close) parent[root(i)] = root(j);
+    }
+  }
+  std::vector<Detection> out;
+  std::vector<int> slot(n, -1);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t r = root(i);
+    if (slot[r] < 0) {
+      slot[r] = static_cast<int>(out.size());
+      out.push_back(in[i]);
+      out.back().points = PointsOf(in[i]);
+      continue;
+    }
+    out[slot[r]] = Merged(out[slot[r]], in[i]);
+  }
+  Renumber(&out);
+  return out;
+}
+
+namespace {
+
+// What one source saw, as (bearing from its viewpoint, range) of its points, sorted by bearing.
+struct Sightings {
+  Eigen::Vector2d viewpoint;
+  std::vector<std::pair<double, double>> seen;
+};
+
+// Whether a source saw through the stretch between two parts: along the segment joining their
+// closest points, at least three of five samples have a point of the source behind them on the
+// same bearing (within 0.01 rad, farther by more than 0.5 m) — the stretch is free space, not an
+// unseen part of one surface. Bearings are atan2(x, z) without wrapping (no view looks straight
+// back).
+bool SeenBetween(const Detection& a, const Detection& b, const Sightings& source) {
+  Eigen::Vector2d pa = a.points.front(), pb = b.points.front();
+  for (const Eigen::Vector2d& p : a.points) {
+    for (const Eigen::Vector2d& q : b.points) {
+      if ((p - q).squaredNorm() < (pa - pb).squaredNorm()) pa = p, pb = q;
+    }
+  }
+  int seen = 0;
+  for (int k = 1; k <= 5; ++k) {
+    const Eigen::Vector2d s = pa + (pb - pa) * (k / 6.0) - source.viewpoint;
+    const double bearing = std::atan2(s.x(), s.y()), range = s.norm();
+    auto it = std::lower_bound(source.seen.begin(), source.seen.end(), std::make_pair(bearing - 0.01, 0.0));
+    for (; it != source.seen.end() && it->first <= bearing + 0.01; ++it) {
+      if (it->second > range + 0.5) {
+        ++seen;
+        break;
+      }
+    }
+  }
+  return seen >= 3;
+}
+
+}  // namespace
+
+std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_length_m, double max_width_m,
+                                         bool across_sources_only,
+                                         const std::map<std::string, Eigen::Vector2d>& viewpoints) {
+  for (Detection& e : d) e.points = PointsOf(e);
+  // Each source's sightings, once: merging only regroups the points.
+  std::map<std::string, Sightings> sightings;
+  for (const auto& [source, viewpoint] : viewpoints) {
+    Sightings& v = sightings[source];
+    v.viewpoint = viewpoint;
+    for (const Detection& e : d) {
+      if (e.source != source) continue;
+      for (const Eigen::Vector2d& p : e.points) {
+        const Eigen::Vector2d r = p - viewpoint;
+        v.seen.emplace_back(std::atan2(r.x(), r.y()), r.norm());
+      }
+    }
+    std::sort(v.seen.begin(), v.seen.end());
+  }
+  for (;;) {
+    size_t bi = 0, bj = 0;
+    // Parts of different sources first (each source has kept its own parts apart), then the
+    // smallest union: (same source, length), lowest first.
+    std::pair<bool, double> best{true, std::numeric_limits<double>::infinity()};
+    for (size_t i = 0; i < d.size(); ++i) {
+      for (size_t j = i + 1; j < d.size(); ++j) {
+        if (d[i].frame != d[j].frame || (across_sources_only && d[i].source == d[j].source)) continue;
+        std::vector<cv::Point2f> points;
+        for (const Detection* e : {&d[i], &d[j]}) {
+          for (const Eigen::Vector2d& p : e->points) points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+        }
+        const cv::RotatedRect box = cv::minAreaRect(points);
+        const double length = std::max(box.size.width, box.size.height), width = std::min(box.size.width, box.size.height);
+        const std::pair<bool, double> key{d[i].source == d[j].source, length};
+        if (length > max_length_m || width > max_width_m || !(key < best)) continue;
+        const auto source = sightings.find(d[i].source);
+        if (d[i].source == d[j].source && source != sightings.end() && SeenBetween(d[i], d[j], source->second)) continue;
+        best = key;
+        bi = i;
+        bj = j;
+      }
+    }
+    if (!std::isfinite(best.second)) break;
+    d[bi] = Merged(d[bi], d[bj]);
+    d.erase(d.begin() + static_cast<std::ptrdiff_t>(bj));
+  }
+  Renumber(&d);
+  return d;
+}
+
+void WriteDetections(const std::vector<Detection>& detections, const std::string& path) {
+  AtomicOutputFile out(path);
+  out.stream().precision(6);
+  out.stream() << std::fixed;
+  out.stream() << "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n";
+  for (const Detection& d : detections) {
+    out.stream() << d.frame << "," << d.t_s << "," << d.source << "," << d.id << "," << d.x_m << ","
+                 << d.z_m << "," << d.range_m << "," << d.x_min_m << "," << d.x_max_m << "," << d.z_min_m
+                 << "," << d.z_max_m << "," << d.n_points << "\n";
+  }
+  out.Commit();
+}
+
+std::vector<Detection> ReadDetections(const std::string& path) {
+  const CsvTable t = CsvTable::Read(path);
+  const int frame = t.Column("frame"), time = t.Column("t"), source = t.Column("source"), id = t.Column("id");
+  const int x = t.Column("x"), z = t.Column("z"), range = t.Column("range");
+  const int x_min = t.Column("x_min"), x_max = t.Column("x_max"), z_min = t.Column("z_min"), z_max = t.Column("z_max");
+  const int n = t.Column("n_points");
+  std::vector<Detection> out;
+  for (size_t r = 0; r < t.rows(); ++r) {
+    Detection d;
+    d.frame = static_cast<int>(t.Number(r, frame));
+    d.t_s = t.Number(r, time);
+    d.source = t.Text(r, source);
+    d.id = static_cast<int>(t.Number(r, id));
+    d.x_m = t.Number(r, x);
+    d.z_m = t.Number(r, z);
+    d.range_m = t.Number(r, range);
+    d.x_min_m = t.Number(r, x_min);
+    d.x_max_m = t.Number(r, x_max);
+    d.z_min_m = t.Number(r, z_min);
+    d.z_max_m = t.Number(r, z_max);
+    d.n_points = static_cast<int>(t.Number(r, n));
+    out.push_back(d);
+  }
+  return out;
+}
+
+}  // namespace dps

@@ -1,0 +1,342 @@
+#include "dps/detect/side_detection.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dps/util/error.h"
+#include "dps/detect/front_detection.h"
+
+namespace dps {
+namespace {
+
+// Where a view pixel's ray meets the road, in the vehicle frame of the view; false above the
+// horizon.
+bool PixelToGround(const VirtualView& view, double x, double y, Eigen::Vector3d* ground) {
+  const Eigen::Vector3d o = view.viewpoint_vehicle();
+  const Eigen::Vector3d r = view.RayVehicle(x, y);
+  if (r.y() <= 1e-9 || o.y() >= 0) return false;
+  *ground = o + (-o.y() / r.y()) * r;
+  return true;
+}
+
+// The bottom-most matched pixel of an object often sits above its contact with the road: the
+// lowest part of a vehicle (wheels, the shadow under it) is dark and untextured, so it has no
+// disparity, and near the contact the road's own disparity approaches the object's, so the score
+// fades. From `bottom` down, pixels with no disparity or with the object's disparity (within
+// `tolerance`) still belong to the object; the walk stops at the first pixel that shows something
+// else (the road at its own disparity), at an ignored pixel (own car, no source), or after
+// `max_gap` rows with no disparity. Returns the lowest object row (the row of the last pixel with
+// the object's disparity; a trailing run with no disparity is not taken).
+int ExtendToContact(const cv::Mat& disparity, const cv::Mat& ignore, int x, int bottom, float object_disparity,
+                    double tolerance, int max_gap) {
+  int lowest = bottom, gap = 0;
+  for (int y = bottom + 1; y < disparity.rows; ++y) {
+    if (ignore.at<std::uint8_t>(y, x)) break;
+    const float d = disparity.at<float>(y, x);
+    if (!std::isfinite(d)) {
+      if (++gap > max_gap) break;
+      continue;
+    }
+    if (std::abs(d - object_disparity) > tolerance) break;
+    lowest = y;
+    gap = 0;
+  }
+  return lowest;
+}
+
+double Median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// The depth of a vehicle-frame point along the view's axis.
+double ViewDepth(const VirtualView& view, const Eigen::Vector3d& p) {
+  return (view.spec().vehicle_from_view.transpose() * (p - view.viewpoint_vehicle())).z();
+}
+
+// One column of a component: where it meets the road (view pixel and ground point), its depth
+// along the view axis, its disparity and its height above the road.
+struct Contact {
+  int x = 0, y = 0;
+  Eigen::Vector2d ground{0, 0};
+  double depth = 0.0, disparity = 0.0, height = 0.0;
+};
+
+// A rigid object that moves parallel to the views (or stands still) has, in every column,
+// disparity = f * (its displacement relative to the camera) / depth: depth times disparity is
+// the same for all its columns. A column whose contact point breaks this (its bottom-most pixel
+// is not where the object meets the road, e.g. only the top of a face was matched) is dropped.
+// Components that hardly move relative to the camera (median |disparity| below
+// min_disparity) carry no such information and are kept as they are.
+std::vector<Contact> ConsistentContacts(std::vector<Contact> contacts, double min_disparity, double tolerance) {
+  if (contacts.size() < 3) return contacts;
+  std::vector<double> products, disparities;
+  for (const Contact& k : contacts) {
+    products.push_back(k.depth * k.disparity);
+    disparities.push_back(std::abs(k.disparity));
+  }
+  if (Median(disparities) < min_disparity) return contacts;
+  const double m = Median(products);
+  std::vector<Contact> kept;
+  for (const Contact& k : contacts) {
+    if (std::abs(k.depth * k.disparity - m) <= tolerance * std::abs(m)) kept.push_back(k);
+  }
+  return kept;
+}
+
+// Contacts (in column order) farther than max_jump from both neighbours on the ground are dropped.
+std::vector<Contact> ContinuousContacts(const std::vector<Contact>& contacts, double max_jump) {
+  if (contacts.size() < 3) return contacts;
+  std::vector<Contact> kept;
+  for (size_t i = 0; i < contacts.size(); ++i) {
+    const bool before = i > 0 && (contacts[i].ground - contacts[i - 1].ground).norm() <= max_jump;
+    const bool after = i + 1 < contacts.size() && (contacts[i].ground - contacts[i + 1].ground).norm() <= max_jump;
+    if (before || after) kept.push_back(contacts[i]);
+  }
+  return kept;
+}
+
+}  // namespace
+
+SideDetectorOptions::SideDetectorOptions() {
+  stereo = DetectionStereoOptions();
+  stereo.min_disparity = -16;
+  histogram.two_sided = true;
+  histogram.min_columns = 10;  // nearby vehicles fill much of a side view; small blobs are road
+}
+
+SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
+                           const SideDetectorOptions& options)
+    : camera_(rig.Camera(camera)), side_(side), vehicle_(rig.vehicle), options_(options) {
+  options_.histogram.min_disparity = options.stereo.min_disparity;
+  options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
+  options_.histogram.two_sided = true;
+  options_.histogram.Check();
+  const OptionCheck require("side detector");
+  require(options.contact_trim_rows >= 0, "contact_trim_rows", options.contact_trim_rows, ">= 0");
+  require(options.max_contact_jump_m > 0, "max_contact_jump_m", options.max_contact_jump_m, "> 0");
+  require(options.pacing_road_contrast_px > 0, "pacing_road_contrast_px", options.pacing_road_contrast_px, "> 0");
+  matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
+}
+
+SideDetector::~SideDetector() = default;
+
+Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
+                         double x_hi) {
+  const auto bearing = [&](double x) {
+    const Eigen::Vector3d ray = view.vehicle_from_view * Eigen::Vector3d((x - view.cx) / view.focal_px, 0.0, 1.0);
+    return Eigen::Vector2d(ray.x(), ray.z()).normalized();
+  };
+  const Eigen::Vector2d a = bearing(x_lo), b = bearing(x_hi), mid = a + b;
+  Sector s;
+  s.name = name;
+  s.apex = apex;
+  s.direction_rad = std::atan2(mid.x(), mid.y());
+  s.half_angle_rad = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) / 2;
+  return s;
+}
+
+std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo) {
+  const auto [first, last] = MatchedColumns(width, stereo);
+  if (side == Side::kLeft) return {width - 1 - last, width - 1 - first};
+  return {first, last};
+}
+
+int SideDetector::ScaleSixteenths(double baseline_m) const {
+  const double upper = options_.stereo.min_disparity + options_.stereo.num_disparities - 1;
+  const double scale = upper * options_.min_static_distance_m / (options_.focal_px * baseline_m);
+  const int lowest = static_cast<int>(std::ceil(16 * options_.min_view_scale));
+  return std::clamp(static_cast<int>(std::floor(16 * scale)), std::min(lowest, 16), 16);
+}
+
+SideViewCache& SideDetector::Views(int sixteenths) {
+  std::unique_ptr<SideViewCache>& views = views_[sixteenths];
+  if (!views) {
+    const double s = sixteenths / 16.0;
+    views = std::make_unique<SideViewCache>(camera_, side_, static_cast<int>(std::lround(options_.view_width * s)),
+                                            static_cast<int>(std::lround(options_.view_height * s)),
+                                            options_.focal_px * s, kSideViewYawStepRad, 16, options_.horizon_fraction);
+  }
+  return *views;
+}
+
+const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view, std::pair<int, long> key) {
+  const auto it = geometry_.find(key);
+  if (it != geometry_.end()) return it->second;
+  if (geometry_.size() > 64) geometry_.clear();  // a long turn through many yaws
+  const ViewSpec& spec = view.spec();
+  ViewGeometry g;
+  g.ignore = OwnCarMask(view, vehicle_, options_.own_car_height_m);
+  cv::bitwise_or(g.ignore, view.mask() == 0, g.ignore);
+  g.inverse_depth = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(0));
+  for (int y = 0; y < spec.height; ++y) {
+    for (int x = 0; x < spec.width; ++x) {
+      Eigen::Vector3d p;
+      if (!PixelToGround(view, x, y, &p)) continue;
+      const double depth = ViewDepth(view, p);
+      if (depth > 0) g.inverse_depth.at<float>(y, x) = static_cast<float>(1.0 / depth);
+    }
+  }
+  return geometry_.emplace(key, std::move(g)).first->second;
+}
+
+SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
+                                const PlanarPose& current_in_previous, double interval_s, bool continuing) {
+  SideResult r;
+  const bool had_last = last_valid_;
+  last_valid_ = false;  // until this call has matched
+  // The camera's displacement, in the previous frame's vehicle frame.
+  const Pose rel = current_in_previous.ToPose3();
+  const Eigen::Vector3d t = camera_.vehicle_from_camera.t;
+  const Eigen::Vector3d delta = rel.Apply(t) - t;
+  r.baseline_m = std::hypot(delta.x(), delta.z());
+  if (r.baseline_m < options_.min_baseline_m) {
+    r.skipped = true;
+    r.reason = Str("camera moved ", r.baseline_m, " m (< ", options_.min_baseline_m, " m)");
+    return r;
+  }
+  // Both views parallel to the displacement: heading alpha in the previous frame, alpha - dh in
+  // the current one. SideViewSpec's yaw turns towards the front on either side.
+  const double alpha = std::atan2(delta.x(), delta.z());
+  // The displacement's direction in the current vehicle frame (for the velocity measurement).
+  const Eigen::Vector2d direction =
+      WorldToBodyDirection(current_in_previous, Eigen::Vector2d(delta.x(), delta.z()).normalized());
+  const double sign = side_ == Side::kLeft ? 1.0 : -1.0;
+  const int sixteenths = ScaleSixteenths(r.baseline_m);
+  r.view_scale = sixteenths / 16.0;
+  SideViewCache& views = Views(sixteenths);
+  const VirtualView& previous_view = views.Get(sign * alpha);
+  const std::pair<int, long> previous_key{sixteenths, views.Key(sign * alpha)};
+  // The last call's current view, when it is this call's previous one.
+  const bool reuse = continuing && had_last && last_key_ == previous_key;
+  views_reused_ += reuse;
+  const cv::Mat previous = reuse ? last_view_ : previous_view.Render(GreyImage(previous_omni));
+  const VirtualView& current_view = views.Get(sign * (alpha - current_in_previous.heading_rad));
+  const std::pair<int, long> current_key{sixteenths, views.Key(sign * (alpha - current_in_previous.heading_rad))};
+  const cv::Mat current = current_view.Render(GreyImage(current_omni));
+  // The current frame is the reference, so that moving objects are placed where they are now.
+  // The camera moves along -x of a right view: static things move right from the previous to the
+  // current image, so current(x) matches previous(x - d) with d = f B / depth > 0, the matcher's
+  // convention. A left view moves along +x: mirrored left to right, the images follow the same
+  // convention, and the disparity is mirrored back.
+  const VirtualView& reference = current_view;
+  r.reference_view = current;
+  r.other_view = previous;
+  const ViewSpec& spec = reference.spec();
+  const ViewGeometry& geometry = Geometry(reference, current_key);
+  const cv::Mat& ignore = geometry.ignore;
+  // Both views prefiltered as matched (mirrored for the left side); the current one is kept for
+  // the next call.
+  const auto prepare = [&](const cv::Mat& view, SadStereoMatcher::PreparedView* prepared) {
+    if (side_ == Side::kLeft) {
+      cv::Mat mirrored;
+      cv::flip(view, mirrored, 1);
+      matcher_->Prepare(mirrored, prepared);
+    } else {
+      matcher_->Prepare(view, prepared);
+    }
+  };
+  if (!reuse) prepare(previous, &last_prepared_);
+  prepare(current, &prepared_);
+  r.disparity = matcher_->Compute(prepared_, last_prepared_);
+  if (side_ == Side::kLeft) cv::flip(r.disparity, r.disparity, 1);
+  const auto [matched_first, matched_last] = SideMatchedColumns(side_, spec.width, options_.stereo);
+  r.sector = ViewColumnsSector(camera_.name, {t.x(), t.z()}, spec, matched_first, matched_last);
+  std::swap(last_prepared_, prepared_);
+  last_view_ = current;
+  last_key_ = current_key;
+  last_valid_ = true;
+  r.disparity.setTo(kInvalidDisparity, ignore);
+  // The road's disparity: f B / depth of the ground point along the view axis.
+  cv::Mat road = geometry.inverse_depth * (spec.focal_px * r.baseline_m);
+  road.setTo(kInvalidDisparity, geometry.inverse_depth == 0);
+  const HistogramOptions& ho = options_.histogram;
+  r.score = ScoreImage(r.disparity, road, ho, RoadRamp(road, options_.stereo.block_height / 2 + 1));
+  cv::Mat moments, labels;
+  r.histogram = ColumnHistogram(r.disparity, r.score, ho, &moments);
+  const std::vector<HistogramComponent> components = FindComponents(r.histogram, ho, &labels, moments);
+  r.obstacle = cv::Mat(spec.height, spec.width, CV_8U, cv::Scalar(0));
+  const auto [first_valid, last_valid] = ValidColumns(r.disparity);
+  const int margin = options_.stereo.block_width;
+  int id = 0;
+  for (const HistogramComponent& c : components) {
+    std::vector<Contact> contacts;
+    for (int x = c.x_begin; x < c.x_end; ++x) {
+      // The component's pixels in this column; the bottom-most is the contact with the road.
+      int bottom = -1, rows = 0;
+      for (int y = 0; y < spec.height; ++y) {
+        const float v = r.disparity.at<float>(y, x);
+        if (!std::isfinite(v) || r.score.at<float>(y, x) <= 0) continue;
+        const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
+        if (bin >= 0 && bin < labels.rows && labels.at<int>(bin, x) == c.label) {
+          bottom = y;
+          ++rows;
+        }
+      }
+      const float disparity = c.column_disparity[x - c.x_begin];
+      Eigen::Vector3d g;
+      if (bottom < 0 || !std::isfinite(disparity) || !PixelToGround(reference, x, bottom, &g)) continue;
+      const int lowest = ExtendToContact(r.disparity, ignore, x, bottom, disparity, options_.contact_tolerance_px,
+                                         static_cast<int>(options_.max_gap_below_m * spec.focal_px / ViewDepth(reference, g)));
+      if (lowest != bottom && !PixelToGround(reference, x, lowest, &g)) continue;
+      Contact k;
+      k.x = x;
+      k.y = lowest;
+      // Depth and disparity of the lowest matched pixel (for the motion); the contact with the
+      // road, placed on the map, contact_trim_rows higher (vertical fattening; half a window for
+      // an object keeping pace with us over road of a different disparity).
+      k.depth = ViewDepth(reference, g);
+      int trim = options_.contact_trim_rows;
+      const float road_here = road.at<float>(lowest, x);
+      if (std::abs(disparity) < options_.min_motion_disparity_px && std::isfinite(road_here) &&
+          std::abs(road_here - disparity) > options_.pacing_road_contrast_px) {
+        trim = std::max(trim, options_.stereo.block_height / 2);
+      }
+      const int contact = std::max(0, lowest - trim);
+      if (contact != lowest && !PixelToGround(reference, x, contact, &g)) continue;
+      k.ground = Eigen::Vector2d(g.x(), g.z());
+      k.disparity = disparity;
+      k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
+      contacts.push_back(k);
+    }
+    contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
+    contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
+    std::vector<Eigen::Vector2d> points;
+    std::vector<double> heights;
+    for (const Contact& k : contacts) {
+      heights.push_back(k.height);
+      if (k.ground.norm() > options_.max_range_m || k.depth > options_.max_depth_m) continue;
+      points.push_back(k.ground);
+      r.obstacle.at<std::uint8_t>(k.y, k.x) = 255;
+    }
+    if (points.empty() || Median(heights) < options_.min_obstacle_height_m) continue;
+    Detection det = DetectionFromPoints(points, camera_.name);
+    if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
+    if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
+    det.id = id++;
+    if (interval_s > 0 && contacts.size() >= 3) {
+      // The object's own displacement along the camera's: B - median(depth x disparity) / f.
+      std::vector<double> products, depths;
+      for (const Contact& k : contacts) {
+        products.push_back(k.depth * k.disparity);
+        depths.push_back(k.depth);
+      }
+      const double product = Median(products);
+      std::vector<double> deviations;
+      for (const double p : products) deviations.push_back(std::abs(p - product));
+      det.has_motion = true;
+      det.motion_direction = direction;
+      det.motion_mps = (r.baseline_m - product / spec.focal_px) / interval_s;
+      // The matching noise, or the columns' own scatter (robust sigma) when that is larger: a
+      // component mixing the object with its background disagrees with itself.
+      det.motion_sigma_mps = std::max(options_.disparity_sigma_px * Median(depths), 1.4826 * Median(deviations)) /
+                             spec.focal_px / interval_s;
+    }
+    r.detections.push_back(std::move(det));
+  }
+  return r;
+}
+
+}  // namespace dps

@@ -1,0 +1,302 @@
+#include "dps/eval/evaluation.h"
+
+#include "dps/map/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace dps {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
+}
+
+std::string Number(double v, int digits = 3) {
+  if (std::isnan(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+// Matches objects with the detections not taken yet (det_object[j] < 0): pairs within
+// max(0.75 m, 0.1 * range of the near point) of the footprint, nearest first, each object and
+// each detection at most once. Sets det_object[j] to the index of detection j's object and
+// returns each object's detection (-1: none).
+std::vector<int> MatchNearestFirst(const std::vector<const TruthRow*>& objects, const std::vector<const Detection*>& dets,
+                                   std::vector<int>* det_object) {
+  struct Pair {
+    double distance;
+    size_t object, detection;
+  };
+  std::vector<Pair> pairs;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const double tolerance = std::max(0.75, 0.1 * NearPoint(*objects[i]).norm());
+    for (size_t j = 0; j < dets.size(); ++j) {
+      if ((*det_object)[j] >= 0) continue;
+      const double d = DistanceToFootprint(*objects[i], {dets[j]->x_m, dets[j]->z_m});
+      if (d <= tolerance) pairs.push_back({d, i, j});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+  std::vector<int> object_match(objects.size(), -1);
+  for (const Pair& p : pairs) {
+    if (object_match[p.object] >= 0 || (*det_object)[p.detection] >= 0) continue;
+    object_match[p.object] = static_cast<int>(p.detection);
+    (*det_object)[p.detection] = static_cast<int>(p.object);
+  }
+  return object_match;
+}
+
+}  // namespace
+
+Eigen::Vector2d Sector::Vertex() const {
+  return apex + start_m * Eigen::Vector2d(std::sin(direction_rad), std::cos(direction_rad));
+}
+
+bool Sector::Contains(const Eigen::Vector2d& p) const {
+  const Eigen::Vector2d d = p - Vertex();
+  return std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) <= half_angle_rad;
+}
+
+bool Coverage::Contains(const Eigen::Vector2d& p) const {
+  if (sectors.empty()) return true;
+  for (const Sector& s : sectors) {
+    if (s.Contains(p)) return true;
+  }
+  return false;
+}
+
+double BandScore::Recall() const { return objects ? double(matched_objects) / objects : 1.0; }
+double BandScore::Precision() const { return detections ? double(matched_detections) / detections : 1.0; }
+double BandScore::MedianRangeError() const { return Quantile(range_errors_m, 0.5); }
+double BandScore::RangeErrorP90() const { return Quantile(range_errors_m, 0.9); }
+double BandScore::MedianRelativeRangeError() const { return Quantile(relative_errors, 0.5); }
+double BandScore::MedianVelocityError() const { return Quantile(velocity_errors_mps, 0.5); }
+double SourceScore::Precision() const { return detections ? double(matched) / detections : 1.0; }
+
+EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
+                          const EvaluationOptions& options) {
+  EvaluationResult result;
+  result.overall.name = "all";
+  result.overall.hi_m = options.max_range_m;
+  const double edges[] = {0, 10, 20, 30, 50};
+  for (int b = 0; b < 4; ++b) {
+    BandScore s;
+    s.lo_m = edges[b];
+    s.hi_m = edges[b + 1];
+    s.name = Number(s.lo_m, 0) + "-" + Number(s.hi_m, 0);
+    result.bands.push_back(s);
+  }
+  for (const char* name : {"front", "left", "right"}) result.sources.push_back({name, 0, 0});
+  auto band_of = [&](double range) -> BandScore* {
+    for (BandScore& b : result.bands) {
+      if (range >= b.lo_m && range < b.hi_m) return &b;
+    }
+    return nullptr;
+  };
+  auto source_of = [&](const std::string& name) -> SourceScore* {
+    for (SourceScore& s : result.sources) {
+      if (s.source == name) return &s;
+    }
+    result.sources.push_back({name, 0, 0});
+    return &result.sources.back();
+  };
+  auto in_zone = [&](const Eigen::Vector2d& p) {
+    return p.norm() <= options.max_range_m && options.coverage.Contains(p);
+  };
+
+  std::map<int, std::vector<const TruthRow*>> truth_by_frame;
+  for (const TruthRow& t : truth) truth_by_frame[t.frame].push_back(&t);
+  std::map<int, std::vector<const Detection*>> det_by_frame;
+  for (const Detection& d : detections) det_by_frame[d.frame].push_back(&d);
+  std::vector<int> frames;
+  for (const auto& [f, v] : truth_by_frame) frames.push_back(f);
+  for (const auto& [f, v] : det_by_frame) frames.push_back(f);
+  std::sort(frames.begin(), frames.end());
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  result.frames = static_cast<int>(frames.size());
+
+  for (const int f : frames) {
+    // Objects in the zone count (recall); the others, partly in view, can still be what a
+    // detection in the zone sees, and such a detection is not a false one.
+    std::vector<const TruthRow*> objects, uncounted;
+    for (const TruthRow* t : truth_by_frame[f]) (in_zone(NearPoint(*t)) ? objects : uncounted).push_back(t);
+    std::vector<const Detection*> dets, outside;
+    for (const Detection* d : det_by_frame[f]) (in_zone({d->x_m, d->z_m}) ? dets : outside).push_back(d);
+    if (!dets.empty()) ++result.frames_with_detections;
+    std::vector<int> det_match(dets.size(), -1);
+    const std::vector<int> object_match = MatchNearestFirst(objects, dets, &det_match);
+    // A counted object no detection in the zone matched may still be matched by one just outside
+    // it (a car whose near point is 19.5 m away, detected at 20.3 m): §5 matches detections and
+    // objects without regard to the zone, which only decides what is counted.
+    std::vector<const TruthRow*> unmatched;
+    std::vector<size_t> unmatched_index;
+    for (size_t i = 0; i < objects.size(); ++i) {
+      if (object_match[i] < 0) unmatched.push_back(objects[i]), unmatched_index.push_back(i);
+    }
+    std::vector<int> outside_match(outside.size(), -1);
+    const std::vector<int> late = MatchNearestFirst(unmatched, outside, &outside_match);
+    // Then the detections left over against the uncounted objects: det_seen[j] >= 0 when
+    // detection j saw an object, counted or not.
+    std::vector<int> det_seen = det_match;
+    MatchNearestFirst(uncounted, dets, &det_seen);
+    std::vector<const Detection*> matched_by(objects.size(), nullptr);
+    for (size_t i = 0; i < objects.size(); ++i) {
+      if (object_match[i] >= 0) matched_by[i] = dets[object_match[i]];
+    }
+    for (size_t k = 0; k < unmatched.size(); ++k) {
+      if (late[k] >= 0) matched_by[unmatched_index[k]] = outside[late[k]];
+    }
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const Eigen::Vector2d near = NearPoint(*objects[i]);
+      const double range = near.norm();
+      if (!matched_by[i]) result.errors.push_back({f, true, objects[i]->id, objects[i]->kind, near, range});
+      for (BandScore* b : {&result.overall, band_of(range)}) {
+        if (!b) continue;
+        ++b->objects;
+        if (matched_by[i]) {
+          ++b->matched_objects;
+          const Detection& d = *matched_by[i];
+          const double error = std::abs(d.range_m - range);
+          b->range_errors_m.push_back(error);
+          b->relative_errors.push_back(error / std::max(range, 1e-6));
+          if (d.has_velocity) {
+            b->velocity_errors_mps.push_back(std::hypot(d.vx_mps - objects[i]->vx_mps, d.vz_mps - objects[i]->vz_mps));
+          }
+        }
+      }
+    }
+    for (size_t j = 0; j < dets.size(); ++j) {
+      const double range = det_match[j] >= 0 ? NearPoint(*objects[det_match[j]]).norm() : dets[j]->range_m;
+      for (BandScore* b : {&result.overall, band_of(range)}) {
+        if (!b) continue;
+        ++b->detections;
+        b->matched_detections += det_seen[j] >= 0;
+      }
+      if (det_seen[j] < 0) {
+        result.errors.push_back({f, false, -1, dets[j]->source, {dets[j]->x_m, dets[j]->z_m}, dets[j]->range_m});
+      }
+      SourceScore* s = source_of(dets[j]->source);
+      ++s->detections;
+      s->matched += det_seen[j] >= 0;
+    }
+  }
+  return result;
+}
+
+TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std::vector<TruthRow>& truth,
+                               const EvaluationOptions& options) {
+  std::vector<Detection> as_detections;
+  for (const TrackState& t : tracks) {
+    if (!t.confirmed) continue;
+    Detection d = DetectionFromPoints({{t.x_m, t.z_m}}, "track");
+    d.frame = t.frame;
+    d.t_s = t.t_s;
+    d.id = t.id;
+    d.has_velocity = true;
+    d.vx_mps = t.vx_mps;
+    d.vz_mps = t.vz_mps;
+    as_detections.push_back(d);
+  }
+  TrackEvaluation out;
+  out.positions = Evaluate(as_detections, truth, options);
+  // Identity switches: per frame, match each counted object to its nearest track within the
+  // tolerance and compare the track id with the object's previous one.
+  std::map<int, std::vector<const Detection*>> by_frame;
+  for (const Detection& d : as_detections) by_frame[d.frame].push_back(&d);
+  std::map<int, int> last_track;  // truth id -> track id
+  for (const TruthRow& t : truth) {
+    const Eigen::Vector2d near = NearPoint(t);
+    if (near.norm() > options.max_range_m || !options.coverage.Contains(near)) continue;
+    const double tolerance = std::max(0.75, 0.1 * near.norm());
+    const Detection* best = nullptr;
+    double best_d = tolerance;
+    for (const Detection* d : by_frame[t.frame]) {
+      const double dist = DistanceToFootprint(t, {d->x_m, d->z_m});
+      if (dist <= best_d) best_d = dist, best = d;
+    }
+    if (!best) continue;
+    const auto it = last_track.find(t.id);
+    if (it == last_track.end()) {
+      ++out.objects_tracked;
+    } else if (it->second != best->id) {
+      ++out.id_switches;
+    }
+    last_track[t.id] = best->id;
+  }
+  return out;
+}
+
+std::string EvaluationTable(const EvaluationResult& r) {
+  std::ostringstream out;
+  out << "band (m)  objects  recall  detections  precision  range error median / p90 (m)\n";
+  auto row = [&](const BandScore& b) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), "%-8s  %7d  %6s  %10d  %9s  %s / %s\n", b.name.c_str(), b.objects,
+                  b.objects ? Number(b.Recall()).c_str() : "-", b.detections,
+                  b.detections ? Number(b.Precision()).c_str() : "-", Number(b.MedianRangeError(), 2).c_str(),
+                  Number(b.RangeErrorP90(), 2).c_str());
+    out << buf;
+  };
+  for (const BandScore& b : r.bands) row(b);
+  row(r.overall);
+  out << "source    detections  matched  precision\n";
+  for (const SourceScore& s : r.sources) {
+    char buf[120];
+    std::snprintf(buf, sizeof(buf), "%-8s  %10d  %7d  %9s\n", s.source.c_str(), s.detections, s.matched,
+                  s.detections ? Number(s.Precision()).c_str() : "-");
+    out << buf;
+  }
+  out << "frames " << r.frames << ", with a detection in the zone " << r.frames_with_detections << "\n";
+  return out.str();
+}
+
+std::string EvaluationJson(const EvaluationResult& r) {
+  std::ostringstream out;
+  auto band = [&](const BandScore& b) {
+    out << "{\"band\": \"" << b.name << "\", \"objects\": " << b.objects << ", \"matched_objects\": "
+        << b.matched_objects << ", \"recall\": " << Number(b.Recall(), 4) << ", \"detections\": " << b.detections
+        << ", \"matched_detections\": " << b.matched_detections << ", \"precision\": " << Number(b.Precision(), 4)
+        << ", \"range_error_median_m\": " << Number(b.MedianRangeError(), 4)
+        << ", \"range_error_p90_m\": " << Number(b.RangeErrorP90(), 4)
+        << ", \"range_error_median_relative\": " << Number(b.MedianRelativeRangeError(), 4)
+        << ", \"velocity_error_median_mps\": " << Number(b.MedianVelocityError(), 4) << "}";
+  };
+  out << "{\n  \"overall\": ";
+  band(r.overall);
+  out << ",\n  \"bands\": [";
+  for (size_t i = 0; i < r.bands.size(); ++i) {
+    out << (i ? ", " : "");
+    band(r.bands[i]);
+  }
+  out << "],\n  \"sources\": [";
+  for (size_t i = 0; i < r.sources.size(); ++i) {
+    const SourceScore& s = r.sources[i];
+    out << (i ? ", " : "") << "{\"source\": \"" << s.source << "\", \"detections\": " << s.detections
+        << ", \"matched\": " << s.matched << ", \"precision\": " << Number(s.Precision(), 4) << "}";
+  }
+  out << "],\n  \"frames\": " << r.frames << ",\n  \"frames_with_detections\": " << r.frames_with_detections
+      << "\n}\n";
+  return out.str();
+}
+
+std::string ScoringErrorsCsv(const EvaluationResult& r) {
+  std::ostringstream out;
+  out << "frame,error,id,kind,x,z,range\n";
+  for (const ScoringError& e : r.errors) {
+    out << e.frame << ',' << (e.missed ? "missed" : "false") << ',' << e.object_id << ',' << e.kind << ','
+        << Number(e.point.x()) << ',' << Number(e.point.y()) << ',' << Number(e.range_m) << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace dps

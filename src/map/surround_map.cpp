@@ -1,0 +1,205 @@
+#include "dps/map/surround_map.h"
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgproc.hpp>
+
+namespace dps {
+
+namespace {
+
+// Vehicle-frame (x, z) to map pixels: the vehicle origin at the centre, +Z up.
+struct MapProjection {
+  double scale;  // px per metre
+  cv::Point2d centre;
+  explicit MapProjection(const MapOptions& o)
+      : scale(o.size_px / (2.0 * o.range_m)), centre(o.size_px / 2.0, o.size_px / 2.0) {}
+  cv::Point operator()(double x, double z) const {
+    return cv::Point(cvRound(centre.x + x * scale), cvRound(centre.y - z * scale));
+  }
+};
+
+}  // namespace
+
+void DrawOwnCar(cv::Mat& map, const Vehicle& vehicle, const MapOptions& o) {
+  const MapProjection to_px(o);
+  cv::rectangle(map, to_px(-vehicle.width_m / 2, vehicle.length_m / 2), to_px(vehicle.width_m / 2, -vehicle.length_m / 2),
+                cv::Scalar(0, 0, 0), cv::FILLED);
+}
+
+cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& o) {
+  const MapProjection to_px(o);
+  const double scale = to_px.scale;
+  cv::Mat map(o.size_px, o.size_px, CV_8UC3, cv::Scalar(255, 255, 255));
+
+  // Coverage: each sector lightly shaded.
+  const cv::Scalar shades[] = {cv::Scalar(235, 245, 225), cv::Scalar(240, 230, 250), cv::Scalar(225, 240, 250)};
+  int k = 0;
+  for (const Sector& s : coverage.sectors) {
+    const Eigen::Vector2d v = s.Vertex();
+    std::vector<cv::Point> poly{to_px(v.x(), v.y())};
+    for (int i = 0; i <= 24; ++i) {
+      const double a = s.direction_rad - s.half_angle_rad + 2 * s.half_angle_rad * i / 24.0;
+      poly.push_back(to_px(v.x() + 2 * o.range_m * std::sin(a), v.y() + 2 * o.range_m * std::cos(a)));
+    }
+    cv::Mat layer = map.clone();
+    cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{poly}, shades[k++ % 3]);
+    cv::addWeighted(layer, 0.7, map, 0.3, 0, map);
+  }
+  // Range rings and their labels.
+  for (double r = o.ring_step_m; r <= o.range_m * 1.42; r += o.ring_step_m) {
+    cv::circle(map, to_px(0, 0), cvRound(r * scale), cv::Scalar(200, 200, 200), 1, cv::LINE_AA);
+    if (std::fmod(r, 2 * o.ring_step_m) < 1e-9 && r <= o.range_m) {
+      cv::putText(map, std::to_string(static_cast<int>(r)) + " m", to_px(0.3, r + 0.3), cv::FONT_HERSHEY_SIMPLEX,
+                  0.35, cv::Scalar(120, 120, 120), 1, cv::LINE_AA);
+    }
+  }
+  // The own car.
+  DrawOwnCar(map, vehicle, o);
+  const cv::Point bar(12, o.size_px - 14);
+  cv::line(map, bar, bar + cv::Point(cvRound(5 * scale), 0), cv::Scalar(0, 0, 0), 2);
+  cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  return map;
+}
+
+namespace {
+
+// Draws the obstacles and the caption onto a map picture (DrawSurroundMap on a copy,
+// DrawFrameMap on its own layers).
+void DrawObstacles(cv::Mat& map, const std::vector<Detection>& detections, const MapOptions& o,
+                   const std::string& caption) {
+  const MapProjection to_px(o);
+  const double scale = to_px.scale;
+  // Obstacles: ground points joined, closed in the picture (each within its own bounding box;
+  // a square closing, which OpenCV runs separably, costs a fraction of a disc's).
+  const int close = cvRound(scale) | 1;
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(close, close));
+  const cv::Rect picture(0, 0, map.cols, map.rows);
+  const int pad = 2 * close + std::max(2, cvRound(0.25 * scale));
+  for (const Detection& d : detections) {
+    std::vector<cv::Point> pts;
+    for (const Eigen::Vector2d& p : d.points) pts.push_back(to_px(p.x(), p.y()));
+    if (pts.empty()) pts.push_back(to_px(d.x_m, d.z_m));
+    const cv::Rect bounds = cv::boundingRect(pts);
+    const cv::Rect box = cv::Rect(bounds.tl() - cv::Point(pad, pad), bounds.br() + cv::Point(pad, pad)) & picture;
+    if (box.empty()) continue;
+    cv::Mat mask(box.size(), CV_8U, cv::Scalar(0));
+    for (cv::Point& p : pts) p -= box.tl();
+    cv::polylines(mask, pts, false, cv::Scalar(255), std::max(2, cvRound(0.25 * scale)));
+    for (const cv::Point& p : pts) cv::circle(mask, p, std::max(1, cvRound(0.15 * scale)), cv::Scalar(255), cv::FILLED);
+    cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);
+    map(box).setTo(cv::Scalar(0, 0, 220), mask);
+  }
+  for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, cv::Scalar(0, 0, 120), cv::FILLED, cv::LINE_AA);
+  cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+}
+
+}  // namespace
+
+cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections, const MapOptions& o,
+                        const std::string& caption) {
+  cv::Mat map = background.clone();
+  DrawObstacles(map, detections, o, caption);
+  return map;
+}
+
+void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOptions& o) {
+  const MapProjection to_px(o);
+  for (const TrackState& t : tracks) {
+    if (!t.confirmed) continue;
+    const cv::Point at = to_px(t.x_m, t.z_m), ahead = to_px(t.predicted.x(), t.predicted.y());
+    // The prediction's 1-sigma ellipse (map y points against z).
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(t.predicted_cov);
+    const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+    const double angle = std::atan2(-axis.y(), axis.x()) * 180.0 / 3.14159265358979323846;
+    const cv::Size axes(std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(1))) * to_px.scale)),
+                        std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(0))) * to_px.scale)));
+    cv::ellipse(map, ahead, axes, angle, 0, 360, cv::Scalar(200, 120, 0), 1, cv::LINE_AA);
+    cv::arrowedLine(map, at, ahead, cv::Scalar(200, 80, 0), 2, cv::LINE_AA, 0, 0.2);
+    cv::putText(map, std::to_string(t.id), at + cv::Point(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                cv::Scalar(200, 80, 0), 1, cv::LINE_AA);
+  }
+}
+
+cv::Mat DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
+                     const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
+                     const MapOptions& options, const std::string& caption) {
+  cv::Mat map;
+  DrawFrameMap(background, grid, vehicle, detections, tracks, options, caption, map);
+  return map;
+}
+
+void DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Vehicle& vehicle,
+                  const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
+                  const MapOptions& options, const std::string& caption, cv::Mat& map) {
+  grid.Draw(background, map, options.range_m);
+  DrawOwnCar(map, vehicle, options);
+  DrawObstacles(map, detections, options, caption);
+  DrawTracks(map, tracks, options);
+}
+
+namespace {
+
+cv::Mat Panel(const cv::Mat& image, cv::Size size, const std::string& label) {
+  cv::Mat out(size, CV_8UC3, cv::Scalar(60, 60, 60));
+  if (!image.empty()) {
+    cv::Mat bgr = image;
+    if (image.channels() == 1) cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+    cv::resize(bgr, out, size, 0, 0, cv::INTER_NEAREST);
+  }
+  cv::putText(out, label, cv::Point(6, 16), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 255, 255), 1, cv::LINE_AA);
+  return out;
+}
+
+}  // namespace
+
+cv::Mat DrawDiagnostics(const std::string& title, const cv::Mat& reference, const cv::Mat& other,
+                        const cv::Mat& disparity, const cv::Mat& histogram, const cv::Mat& obstacle,
+                        double min_d, double max_d, cv::Size panel) {
+  cv::Mat composite, disp_colour, hist_colour, obst_colour;
+  if (!reference.empty() && !other.empty()) {
+    std::vector<cv::Mat> ch = {other, other, reference};  // B, G from the right / later view, R from the left
+    cv::merge(ch, composite);
+  }
+  if (!disparity.empty()) {
+    cv::Mat scaled(disparity.size(), CV_8U);
+    for (int y = 0; y < disparity.rows; ++y) {
+      for (int x = 0; x < disparity.cols; ++x) {
+        const float d = disparity.at<float>(y, x);
+        scaled.at<std::uint8_t>(y, x) = std::isfinite(d) ? cv::saturate_cast<std::uint8_t>(255.0 * (d - min_d) / (max_d - min_d)) : 0;
+      }
+    }
+    cv::applyColorMap(scaled, disp_colour, cv::COLORMAP_TURBO);
+    disp_colour.setTo(cv::Scalar::all(0), disparity == std::numeric_limits<float>::infinity());
+  }
+  if (!histogram.empty()) {
+    cv::Mat h8, flipped;
+    double hi = 0;
+    cv::minMaxLoc(histogram, nullptr, &hi);
+    histogram.convertTo(h8, CV_8U, hi > 0 ? 255.0 / hi : 0);
+    cv::flip(h8, flipped, 0);  // larger disparity (nearer) up
+    cv::applyColorMap(flipped, hist_colour, cv::COLORMAP_HOT);
+  }
+  if (!obstacle.empty()) {
+    cv::Mat o8;
+    if (obstacle.type() == CV_32F) {
+      cv::Mat flipped;
+      cv::flip(obstacle > 0, flipped, 0);
+      o8 = flipped;
+    } else {
+      o8 = obstacle;
+    }
+    cv::dilate(o8, o8, cv::Mat());
+    cv::cvtColor(o8, obst_colour, cv::COLOR_GRAY2BGR);
+  }
+  cv::Mat top, middle, bottom, out;
+  cv::hconcat(Panel(reference, panel, title + ": reference"), Panel(other, panel, "matched"), top);
+  cv::hconcat(Panel(composite, panel, "composite"), Panel(disp_colour, panel, "disparity"), middle);
+  cv::hconcat(Panel(hist_colour, panel, "column histogram"), Panel(obst_colour, panel, "obstacles"), bottom);
+  cv::vconcat(std::vector<cv::Mat>{top, middle, bottom}, out);
+  return out;
+}
+
+}  // namespace dps

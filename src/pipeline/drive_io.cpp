@@ -1,0 +1,171 @@
+#include "dps/pipeline/drive_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "dps/util/csv.h"
+#include "dps/util/error.h"
+
+namespace dps {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ImageFolder : public FrameSource {
+ public:
+  explicit ImageFolder(const fs::path& dir) : dir_(dir) {
+    for (const auto& e : fs::directory_iterator(dir)) {
+      const std::string ext = e.path().extension().string();
+      if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tif" ||
+                                  ext == ".tiff" || ext == ".pgm" || ext == ".ppm")) {
+        files_.push_back(e.path().string());
+      }
+    }
+    std::sort(files_.begin(), files_.end());
+    if (files_.empty()) throw Error(Str(dir.string(), ": no images in the folder"));
+  }
+  bool Read(cv::Mat* image) override {
+    if (next_ >= files_.size()) return false;
+    *image = cv::imread(files_[next_], cv::IMREAD_COLOR);
+    if (image->empty()) throw Error(Str(files_[next_], ": cannot read image"));
+    ++next_;
+    return true;
+  }
+  int count() const override { return static_cast<int>(files_.size()); }
+  double fps() const override { return 0.0; }
+  std::string description() const override { return dir_.string() + "/"; }
+
+ private:
+  fs::path dir_;
+  std::vector<std::string> files_;
+  size_t next_ = 0;
+};
+
+class VideoFile : public FrameSource {
+ public:
+  explicit VideoFile(const std::string& path) : path_(path), capture_(path) {
+    if (!capture_.isOpened()) throw Error(Str(path, ": cannot open video"));
+    count_ = static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_COUNT));
+    fps_ = capture_.get(cv::CAP_PROP_FPS);
+  }
+  bool Read(cv::Mat* image) override { return capture_.read(*image) && !image->empty(); }
+  int count() const override { return count_; }
+  double fps() const override { return fps_; }
+  std::string description() const override { return path_; }
+
+ private:
+  std::string path_;
+  cv::VideoCapture capture_;
+  int count_ = 0;
+  double fps_ = 0.0;
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> FrameSource::Open(const std::string& drive_dir, const std::string& camera) {
+  const fs::path folder = fs::path(drive_dir) / camera;
+  if (fs::is_directory(folder)) return std::make_unique<ImageFolder>(folder);
+  if (fs::is_directory(drive_dir)) {
+    for (const auto& e : fs::directory_iterator(drive_dir)) {
+      if (e.is_regular_file() && e.path().stem() == camera && e.path().extension() != ".yaml") {
+        return std::make_unique<VideoFile>(e.path().string());
+      }
+    }
+  }
+  throw Error(Str(drive_dir, ": no '", camera, "/' image folder or '", camera, ".<ext>' video"));
+}
+
+CanLog ReadCanLog(const std::string& path, const CanLogFormat& f) {
+  const CsvTable t = CsvTable::Read(path);
+  const int tc = t.Column(f.time_column), sc = t.Column(f.speed_column);
+  const bool own_yaw = f.yaw_rate_file.empty() && t.HasColumn(f.yaw_rate_column);
+  const int yc = own_yaw ? t.Column(f.yaw_rate_column) : -1;
+  CanLog log;
+  std::vector<MotionSample> samples;
+  int nan_rows = 0, duplicates = 0;
+  for (size_t r = 0; r < t.rows(); ++r) {
+    const double time = t.Number(r, tc), speed = t.Number(r, sc) * f.speed_scale;
+    const double yaw = yc >= 0 ? t.Number(r, yc) * f.yaw_rate_scale : 0.0;
+    if (!std::isfinite(time) || !std::isfinite(speed) || !std::isfinite(yaw)) {
+      ++nan_rows;
+      continue;
+    }
+    if (!samples.empty() && time < samples.back().t_s) {
+      throw Error(Str(path, ":", t.Line(r), ": time ", time, " goes backwards (previous ", samples.back().t_s,
+                      "); sort the log"));
+    }
+    if (!samples.empty() && time == samples.back().t_s) {
+      ++duplicates;
+      continue;
+    }
+    samples.push_back({time, speed, yaw});
+  }
+  if (samples.size() < 2) throw Error(Str(path, ": fewer than 2 usable samples"));
+  if (nan_rows) log.warnings.push_back(Str(path, ": ", nan_rows, " row(s) with NaN dropped"));
+  if (duplicates) log.warnings.push_back(Str(path, ": ", duplicates, " duplicate time(s) dropped (first kept)"));
+  if (!f.yaw_rate_file.empty()) {
+    // Yaw rate from a second log, interpolated to the speed samples' times.
+    const CsvTable g = CsvTable::Read(f.yaw_rate_file);
+    const int gt = g.Column(f.yaw_rate_time_column), gy = g.Column(f.yaw_rate_column);
+    std::vector<MotionSample> gyro;
+    for (size_t r = 0; r < g.rows(); ++r) {
+      const double time = g.Number(r, gt), yaw = g.Number(r, gy) * f.yaw_rate_scale;
+      if (!std::isfinite(time) || !std::isfinite(yaw)) continue;
+      if (!gyro.empty() && time < gyro.back().t_s) {
+        throw Error(Str(f.yaw_rate_file, ":", g.Line(r), ": time goes backwards; sort the log"));
+      }
+      if (!gyro.empty() && time == gyro.back().t_s) continue;
+      gyro.push_back({time, 0.0, yaw});
+    }
+    if (gyro.size() < 2) throw Error(Str(f.yaw_rate_file, ": fewer than 2 usable samples"));
+    const MotionProfile gyro_profile(gyro);
+    for (MotionSample& s : samples) s.yaw_rate_radps = gyro_profile.At(s.t_s).yaw_rate_radps;
+    // Outside the gyro log the yaw rate is unknown: shrink the span.
+    const double g0 = gyro.front().t_s, g1 = gyro.back().t_s;
+    samples.erase(std::remove_if(samples.begin(), samples.end(),
+                                 [&](const MotionSample& s) { return s.t_s < g0 || s.t_s > g1; }),
+                  samples.end());
+    if (samples.size() < 2) throw Error(Str(path, " and ", f.yaw_rate_file, ": the logs do not overlap in time"));
+  }
+  for (size_t i = 1; i < samples.size(); ++i) {
+    if (samples[i].t_s - samples[i - 1].t_s > f.max_gap_s) log.gaps.emplace_back(samples[i - 1].t_s, samples[i].t_s);
+  }
+  log.t_begin = samples.front().t_s;
+  log.t_end = samples.back().t_s;
+  log.profile = MotionProfile(samples);
+  return log;
+}
+
+bool MotionBetween(const CanLog& log, double t0, double t1, PlanarPose* pose, std::string* why) {
+  if (t0 < log.t_begin || t1 > log.t_end) {
+    if (why) *why = Str("outside the CAN log (", log.t_begin, " .. ", log.t_end, " s)");
+    return false;
+  }
+  for (const auto& [a, b] : log.gaps) {
+    if (a < t1 && b > t0) {
+      if (why) *why = Str("inside a CAN gap of ", b - a, " s (", a, " .. ", b, " s)");
+      return false;
+    }
+  }
+  *pose = log.profile.Integrate(PlanarPose{}, t0, t1);
+  return true;
+}
+
+std::vector<double> ReadFrameTimes(const std::string& path) {
+  const CsvTable t = CsvTable::Read(path);
+  const int fc = t.Column("frame"), tc = t.Column("t");
+  std::vector<double> times;
+  for (size_t r = 0; r < t.rows(); ++r) {
+    const double frame = t.Number(r, fc);
+    if (frame != static_cast<double>(times.size())) {
+      throw Error(Str(path, ":", t.Line(r), ": expected frame ", times.size(), ", got ", frame));
+    }
+    times.push_back(t.Number(r, tc));
+  }
+  return times;
+}
+
+}  // namespace dps

@@ -1,0 +1,183 @@
+#include "dps/pipeline/surround_pipeline.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <tuple>
+
+#include <opencv2/core/utility.hpp>
+
+#include "dps/util/error.h"
+#include "dps/stereo/virtual_view.h"
+
+namespace dps {
+namespace {
+
+constexpr double kMaxViewScale = 1.25;
+
+}  // namespace
+
+PipelineOptions DefaultPipelineOptions(const Rig& rig) {
+  PipelineOptions o;
+  // Views scale with the omni image up to 1.25 times the 640 px settings: larger views cost the
+  // cube of their scale (width, height, disparities) while the mirror's resolution near the
+  // horizon, where the views look, grows more slowly (docs/performance.md).
+  const double s = std::min(kMaxViewScale, rig.Camera("left").model.width() / 640.0);
+  const int w = std::max(64, static_cast<int>(std::lround(400 * s))), h = std::max(32, static_cast<int>(std::lround(200 * s)));
+  // 96 disparities at 640 px: with a 2 m baseline and f = 170 px the front pair then sees down to
+  // 3.5 m, and the side pairs cover vehicles passing at up to about 7 m/s relative speed (15 fps).
+  const int d = std::max(16, static_cast<int>(std::lround(96 * s / 16.0)) * 16);
+  const int block = s >= 0.75 ? 9 : 7;
+  for (StereoOptions* st : {&o.front.stereo, &o.side.stereo}) {
+    st->num_disparities = d;
+    st->block_width = st->block_height = block;
+  }
+  o.side.stereo.min_disparity = -(d * 5) / 12;  // -40 of 96
+  o.front.histogram.far_reference_px = d / 3.0;  // fewer votes needed below (disparity_histogram.h)
+  o.side.contact_trim_rows = block >= 9 ? 2 : 0;  // side_detection.h
+  o.front.view_width = o.side.view_width = w;
+  o.front.view_height = o.side.view_height = h;
+  o.front.focal_px = o.side.focal_px = 170.0 * s;
+  return o;
+}
+
+Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
+  Coverage c;
+  const Eigen::Vector3d l = rig.Camera("left").vehicle_from_camera.t, r = rig.Camera("right").vehicle_from_camera.t;
+  const ViewSpec front = FrontViewSpec(rig, "left", "right", o.front.view_width, o.front.view_height, o.front.focal_px);
+  const Eigen::Vector3d dir = front.vehicle_from_view.col(2);
+  // Binocular stereo sees what both views see. They share the axis and the half-angle, so their
+  // overlap is a sector from where the left view's right edge crosses the right view's left edge:
+  // each edge closes tan(half) across the axis per metre along it, so they meet half the cameras'
+  // separation across the axis, over tan(half), ahead of the midpoint (0.85 m for cameras 2 m
+  // apart and +-49.6 degrees), whatever their offset along the axis.
+  const double axis = std::atan2(dir.x(), dir.z()), half = std::atan(o.front.view_width / 2.0 / o.front.focal_px);
+  const Eigen::Vector2d lg(l.x(), l.z()), rg(r.x(), r.z()), across(std::cos(axis), -std::sin(axis));
+  c.sectors.push_back({"front", (lg + rg) / 2, axis, half, across.dot(rg - lg) / 2 / std::tan(half)});
+  if (o.sides) {
+    // Each side view's columns that motion stereo matches, at the views' full size (at speed the
+    // views shrink and their matched columns span less: SideResult::sector is each frame's).
+    for (const auto& [name, side, at] : {std::make_tuple("left", Side::kLeft, l), std::make_tuple("right", Side::kRight, r)}) {
+      const ViewSpec view = SideViewSpec(side, o.side.view_width, o.side.view_height, o.side.focal_px, 0.0,
+                                         o.side.horizon_fraction);
+      const auto [first, last] = SideMatchedColumns(side, view.width, o.side.stereo);
+      c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last));
+    }
+  }
+  return c;
+}
+
+SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& options)
+    : rig_(rig), options_(options), coverage_(PipelineCoverage(rig, options)) {
+  // Where each source looks from (the sectors' apexes), for MergeVehicleParts' see-through test.
+  for (const Sector& s : coverage_.sectors) viewpoints_[s.name] = s.apex;
+  front_ = std::make_unique<FrontDetector>(rig, options.front);
+  if (options.sides) {
+    left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
+    right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
+  }
+}
+
+SurroundPipeline::~SurroundPipeline() = default;
+
+FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<std::function<void()>>& alongside) {
+  FrameOutput out;
+  auto now = [] { return std::chrono::steady_clock::now(); };
+  auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+  const auto t0 = now();
+  // The first frame has nothing to compare the side views with.
+  const bool sides = options_.sides && !previous_left_.empty() && in.motion_known;
+  // The side detectors' last frame is the previous one only if that frame went through (an
+  // exception leaves previous_left_ as it was).
+  const bool continuing = sides_last_;
+  sides_last_ = false;
+  if (options_.sides && !previous_left_.empty() && !in.motion_known) {
+    out.warnings.push_back(Str("frame ", in.frame, ": no known motion (CAN); side detection skipped"));
+  }
+  // Grey images of our own, once per frame (every view samples grey images; the side views keep
+  // the previous frame's, and the caller may reuse the input's buffers).
+  cv::Mat grey[2];
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& images) {
+    for (int i = images.start; i < images.end; ++i) {
+      const cv::Mat& image = i == 0 ? in.left : in.right;
+      grey[i] = image.channels() == 1 ? image.clone() : GreyImage(image);
+    }
+  }, 2);
+  // The front views first (both references match them).
+  const auto front_start = now();
+  front_->RenderViews(grey[0], grey[1], &out.front);
+  const double front_views_ms = ms(front_start, now());
+  // The sources share nothing but the input, so they run as concurrent tasks with the caller's
+  // `alongside` work: each of cv::getNumThreads() workers takes the next task until none is left,
+  // in the order front (its two references), alongside..., left, right (the front pair is the
+  // largest). Each stage's own cv::parallel_for_ then runs serially inside its task (OpenCV does
+  // not nest parallel regions): on 2 cores this costs less than splitting every stage into
+  // stripes, whose synchronisation dominates at the paper's 320x240 (docs/performance.md).
+  const int n_alongside = static_cast<int>(alongside.size());
+  // Task ids; alongside k is kAlongside + k.
+  const int kFront = 0, kFrontRight = 1, kLeft = 2, kRight = 3, kAlongside = 4;
+  std::vector<int> tasks{kFront, kFrontRight};
+  for (int k = 0; k < n_alongside; ++k) tasks.push_back(kAlongside + k);
+  if (sides) tasks.insert(tasks.end(), {kLeft, kRight});
+  const double dt = in.t_s - previous_t_s_;
+  std::vector<double> task_ms(kAlongside + n_alongside, 0.0);
+  std::vector<std::exception_ptr> failure(kAlongside + n_alongside);
+  std::atomic<int> next{0};
+  const int workers = std::max(1, std::min<int>(cv::getNumThreads(), static_cast<int>(tasks.size())));
+  cv::parallel_for_(cv::Range(0, workers), [&](const cv::Range& range) {
+    for (int w = range.start; w < range.end; ++w) {
+      for (int i = next++; i < static_cast<int>(tasks.size()); i = next++) {
+        const int task = tasks[i];
+        const auto start = now();
+        try {
+          if (task == kFront) front_->MatchReference(FrontReference::kLeftView, &out.front);
+          if (task == kFrontRight) front_->MatchReference(FrontReference::kRightView, &out.front);
+          if (task == kLeft) {
+            out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, continuing);
+          }
+          if (task == kRight) {
+            out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, continuing);
+          }
+          if (task >= kAlongside) alongside[task - kAlongside]();
+        } catch (...) {
+          failure[task] = std::current_exception();
+        }
+        task_ms[task] = ms(start, now());
+      }
+    }
+  }, workers);
+  for (const std::exception_ptr& f : failure) {
+    if (f) std::rethrow_exception(f);
+  }
+  front_->CombineReferences(&out.front);
+  out.front_ms = front_views_ms + task_ms[kFront] + task_ms[kFrontRight];
+  out.sides_ms = task_ms[kLeft] + task_ms[kRight];
+  out.detect_ms = ms(t0, now());
+  out.detections = out.front.detections;
+  out.coverage.sectors.push_back(coverage_.sectors.front());
+  for (const SideResult* s : {&out.left, &out.right}) {
+    if (!sides || s->skipped) continue;
+    out.coverage.sectors.push_back(s->sector);
+    for (const Detection& d : s->detections) out.detections.push_back(d);
+  }
+  sides_last_ = sides;  // the side detectors saw this frame as their current one
+  if (options_.sides) {
+    previous_left_ = grey[0];
+    previous_right_ = grey[1];
+    previous_t_s_ = in.t_s;
+  }
+  for (Detection& d : out.detections) {
+    d.frame = in.frame;
+    d.t_s = in.t_s;
+  }
+  out.detections = FuseDetections(out.detections, options_.merge_distance_m);
+  if (options_.vehicle_length_m > 0) {
+    out.detections = MergeVehicleParts(std::move(out.detections), options_.vehicle_length_m,
+                                       options_.vehicle_width_m, options_.vehicle_across_sources_only, viewpoints_);
+  }
+  return out;
+}
+
+}  // namespace dps

@@ -1,0 +1,206 @@
+#include "dps/synth/scene_io.h"
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "dps/camera/rig_io.h"
+#include "util/yaml_fields.h"
+
+namespace dps {
+namespace {
+
+using internal::FieldReader;
+
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+
+double Positive(const FieldReader& f, const std::string& key, double fallback) {
+  const double v = f.NumberOr(key, fallback);
+  if (!(v > 0.0)) f.Fail(key, Str("= ", v, ": violated constraint > 0"));
+  return v;
+}
+
+double NonNegative(const FieldReader& f, const std::string& key, double fallback) {
+  const double v = f.NumberOr(key, fallback);
+  if (!(v >= 0.0)) f.Fail(key, Str("= ", v, ": violated constraint >= 0"));
+  return v;
+}
+
+// A motion given as `speed` / `yaw_rate_deg` numbers, or as a list of keyframes under `key`.
+MotionProfile ReadMotion(const FieldReader& f, const std::string& key) {
+  std::vector<MotionSample> samples;
+  if (f.Has(key)) {
+    const cv::FileNode list = f.Required(key);
+    if (!list.isSeq() || list.size() == 0) f.Fail(key, "expected a non-empty list of {t, speed, yaw_rate_deg}");
+    int i = 0;
+    for (const cv::FileNode& item : list) {
+      const FieldReader k = f.Child(item, Str(key, "[", i++, "]"));
+      samples.push_back({k.Number("t"), k.Number("speed"), k.NumberOr("yaw_rate_deg", 0.0) * kDegToRad});
+    }
+  } else {
+    samples.push_back({0.0, f.NumberOr("speed", 0.0), f.NumberOr("yaw_rate_deg", 0.0) * kDegToRad});
+  }
+  try {
+    return MotionProfile(samples);
+  } catch (const std::invalid_argument& e) {
+    f.Fail(key, e.what());
+  }
+}
+
+struct KindDefaults {
+  const char* kind;
+  double length, width, height, brightness;
+};
+constexpr KindDefaults kKinds[] = {
+    {"car", 4.5, 1.8, 1.5, 0.6},  {"truck", 10.0, 2.5, 3.5, 0.7}, {"pole", 0.2, 0.2, 3.0, 0.5},
+    {"wall", 10.0, 0.3, 2.0, 0.55}, {"pedestrian", 0.5, 0.6, 1.8, 0.45}};
+
+SceneObject ReadObject(const FieldReader& f) {
+  SceneObject o;
+  o.kind = f.TextOr("kind", "car");
+  const KindDefaults* d = nullptr;
+  for (const KindDefaults& k : kKinds) {
+    if (o.kind == k.kind) d = &k;
+  }
+  if (!d) f.Fail("kind", "unknown kind '" + o.kind + "' (expected car, truck, pole, wall or pedestrian)");
+  o.id = f.Integer("id");
+  if (o.id < 1) f.Fail("id", Str("= ", o.id, ": violated constraint >= 1"));
+  o.length_m = Positive(f, "length", d->length);
+  o.width_m = Positive(f, "width", d->width);
+  o.height_m = Positive(f, "height", d->height);
+  o.start.x_m = f.Number("x");
+  o.start.z_m = f.Number("z");
+  o.start.heading_rad = f.NumberOr("heading_deg", 0.0) * kDegToRad;
+  o.motion = ReadMotion(f, "motion");
+  o.brightness = f.NumberOr("brightness", d->brightness);
+  if (!(o.brightness > 0.0 && o.brightness <= 1.0)) f.Fail("brightness", "expected a value in (0, 1]");
+  o.colour = f.IntegerOr("colour", o.id);
+  return o;
+}
+
+PaintedLine ReadLine(const FieldReader& f) {
+  PaintedLine l;
+  const std::string axis = f.Text("axis");
+  if (axis != "X" && axis != "Z") f.Fail("axis", "expected X or Z (poles give the Y direction)");
+  l.axis = axis[0];
+  if (l.axis == 'Z') {
+    const double x = f.Number("x");
+    l.from_xz = {x, f.Number("z_from")};
+    l.to_xz = {x, f.Number("z_to")};
+  } else {
+    const double z = f.Number("z");
+    l.from_xz = {f.Number("x_from"), z};
+    l.to_xz = {f.Number("x_to"), z};
+  }
+  if ((l.to_xz - l.from_xz).norm() < 1.0) f.Fail("axis", "line shorter than 1 m");
+  l.width_m = Positive(f, "width", l.width_m);
+  return l;
+}
+
+}  // namespace
+
+Scene ReadScene(const std::string& path) {
+  cv::FileStorage fs = internal::OpenForReading(path);
+  const FieldReader f(fs.root(), path);
+  Scene s;
+  s.name = f.TextOr("name", std::filesystem::path(path).stem().string());
+  const std::string kind = f.TextOr("kind", "drive");
+  if (kind == "drive") {
+    s.kind = SceneKind::kDrive;
+  } else if (kind == "calibration") {
+    s.kind = SceneKind::kCalibration;
+  } else {
+    f.Fail("kind", "expected drive or calibration, got '" + kind + "'");
+  }
+
+  const cv::FileNode rig = f.Required("rig");
+  if (rig.isString()) {
+    const std::filesystem::path rel(static_cast<std::string>(rig));
+    const std::filesystem::path rig_path =
+        rel.is_absolute() ? rel : std::filesystem::path(path).parent_path() / rel;
+    try {
+      s.rig = ReadRig(rig_path.string());
+    } catch (const Error& e) {
+      f.Fail("rig", e.what());
+    }
+  } else if (rig.isMap()) {
+    s.rig = ParseRig(rig, path + ": rig");
+  } else {
+    f.Fail("rig", "expected a path to rig.yaml or a map with its fields");
+  }
+  if (f.Has("size")) {
+    const Eigen::MatrixXd size = f.Matrix("size", 2, 1);
+    if (size(0) < 16 || size(1) < 16) f.Fail("size", "expected [width, height], each >= 16");
+    ResizeScene(&s, static_cast<int>(size(0)), static_cast<int>(size(1)));
+  }
+  s.fps = Positive(f, "fps", s.fps);
+  s.duration_s = Positive(f, "duration_s", s.duration_s);
+  const double seed = f.NumberOr("seed", 1.0);
+  if (seed < 0 || seed != std::floor(seed)) f.Fail("seed", "expected a non-negative integer");
+  s.seed = static_cast<std::uint64_t>(seed);
+
+  if (f.Has("render")) {
+    const FieldReader r = f.Child(f.Required("render"), "render");
+    s.render.supersample = r.IntegerOr("supersample", s.render.supersample);
+    if (s.render.supersample < 1 || s.render.supersample > 8) r.Fail("supersample", "expected 1..8");
+    s.render.noise_sigma = NonNegative(r, "noise_sigma", s.render.noise_sigma);
+    s.render.blur_sigma_px = NonNegative(r, "blur_sigma_px", s.render.blur_sigma_px);
+  }
+  s.ego = ReadMotion(f, "ego");
+
+  if (f.Has("road")) {
+    const cv::FileNode road = f.Required("road");
+    if (road.isString() && static_cast<std::string>(road) == "none") {
+      s.road.enabled = false;
+    } else if (road.isMap()) {
+      const FieldReader r = f.Child(road, "road");
+      s.road.lane_width_m = Positive(r, "lane_width", s.road.lane_width_m);
+      s.road.lanes_left = r.IntegerOr("lanes_left", s.road.lanes_left);
+      s.road.lanes_right = r.IntegerOr("lanes_right", s.road.lanes_right);
+      if (s.road.lanes_left < 0) r.Fail("lanes_left", "expected >= 0");
+      if (s.road.lanes_right < 0) r.Fail("lanes_right", "expected >= 0");
+      s.road.ego_lane_center_x_m = r.NumberOr("ego_lane_center_x", 0.0);
+      s.road.marking_width_m = Positive(r, "marking_width", s.road.marking_width_m);
+      s.road.dash_length_m = Positive(r, "dash_length", s.road.dash_length_m);
+      s.road.dash_gap_m = NonNegative(r, "dash_gap", s.road.dash_gap_m);
+    } else {
+      f.Fail("road", "expected a map of lane settings or 'none'");
+    }
+  } else if (s.kind == SceneKind::kCalibration) {
+    s.road.enabled = false;
+  }
+
+  std::set<int> ids;
+  if (f.Has("objects")) {
+    const cv::FileNode list = f.Required("objects");
+    if (!list.isSeq()) f.Fail("objects", "expected a list");
+    int i = 0;
+    for (const cv::FileNode& item : list) {
+      SceneObject o = ReadObject(f.Child(item, Str("objects[", i++, "]")));
+      if (!ids.insert(o.id).second) f.Fail("objects", Str("duplicate id ", o.id));
+      s.objects.push_back(std::move(o));
+    }
+  }
+  if (f.Has("lines")) {
+    const cv::FileNode list = f.Required("lines");
+    if (!list.isSeq()) f.Fail("lines", "expected a list");
+    int i = 0;
+    for (const cv::FileNode& item : list) s.lines.push_back(ReadLine(f.Child(item, Str("lines[", i++, "]"))));
+  }
+  if (f.Has("calibration")) {
+    const FieldReader c = f.Child(f.Required("calibration"), "calibration");
+    s.calibration.mark_noise_px = NonNegative(c, "mark_noise_px", s.calibration.mark_noise_px);
+    s.calibration.mark_spacing_m = Positive(c, "mark_spacing", s.calibration.mark_spacing_m);
+    s.calibration.min_rotation_deg = NonNegative(c, "min_rotation_deg", s.calibration.min_rotation_deg);
+    s.calibration.max_rotation_deg = NonNegative(c, "max_rotation_deg", s.calibration.max_rotation_deg);
+    if (s.calibration.max_rotation_deg < s.calibration.min_rotation_deg) {
+      c.Fail("max_rotation_deg", "expected >= min_rotation_deg");
+    }
+  }
+  if (s.kind == SceneKind::kCalibration && s.lines.empty()) {
+    f.Fail("lines", "a calibration scene needs painted lines");
+  }
+  return s;
+}
+
+}  // namespace dps

@@ -1,0 +1,352 @@
+#include "dps/synth/scene_renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace dps {
+namespace {
+
+// The own car: a lower body (bonnet / boot height) over the full length and width, and a cabin,
+// so that cameras at the side mirrors see forward over the bonnet, as on a real car.
+constexpr double kOwnBodyHeightM = 0.8;
+constexpr double kOwnCabinHeightM = 1.45;
+constexpr double kOwnCabinRearFraction = -0.40;  // cabin from -0.40 L to +0.12 L along Z
+constexpr double kOwnCabinFrontFraction = 0.12;
+constexpr double kOwnCabinInsetM = 0.1;          // narrower than the body on each side
+constexpr double kTwoPi = 6.28318530717958647692;
+
+// Integer hash (lowbias32 by C. Wellons) of up to three integers and a seed.
+inline std::uint32_t Hash(std::uint32_t x) {
+  x ^= x >> 16;
+  x *= 0x7feb352dU;
+  x ^= x >> 15;
+  x *= 0x846ca68bU;
+  x ^= x >> 16;
+  return x;
+}
+inline std::uint32_t Hash(std::int64_t a, std::int64_t b, std::uint32_t seed) {
+  return Hash(static_cast<std::uint32_t>(a) ^ Hash(static_cast<std::uint32_t>(b) ^ Hash(seed)));
+}
+inline double Unit(std::uint32_t h) { return (h >> 8) * (1.0 / 16777216.0); }  // [0, 1)
+
+// Smooth value noise in [0, 1] on a unit lattice.
+double ValueNoise(double x, double y, std::uint32_t seed) {
+  const double fx = std::floor(x), fy = std::floor(y);
+  const auto ix = static_cast<std::int64_t>(fx), iy = static_cast<std::int64_t>(fy);
+  double tx = x - fx, ty = y - fy;
+  tx = tx * tx * (3 - 2 * tx);
+  ty = ty * ty * (3 - 2 * ty);
+  const double a = Unit(Hash(ix, iy, seed)), b = Unit(Hash(ix + 1, iy, seed));
+  const double c = Unit(Hash(ix, iy + 1, seed)), d = Unit(Hash(ix + 1, iy + 1, seed));
+  return (a + (b - a) * tx) + ((c + (d - c) * tx) - (a + (b - a) * tx)) * ty;
+}
+
+// Fractal noise in about [0, 1]: octaves of value noise from `scale_m` down by halves.
+double Fbm(double x, double y, double scale_m, int octaves, std::uint32_t seed) {
+  double sum = 0.0, amp = 0.5, norm = 0.0, f = 1.0 / scale_m;
+  for (int i = 0; i < octaves; ++i) {
+    sum += amp * ValueNoise(x * f, y * f, seed + 977u * i);
+    norm += amp;
+    amp *= 0.55;
+    f *= 2.0;
+  }
+  return sum / norm;
+}
+
+// Body colours (BGR, 0..1) of the palette.
+const cv::Vec3f kPalette[] = {{0.20f, 0.22f, 0.80f}, {0.75f, 0.45f, 0.20f}, {0.72f, 0.72f, 0.70f},
+                              {0.92f, 0.92f, 0.90f}, {0.25f, 0.45f, 0.20f}, {0.15f, 0.75f, 0.85f},
+                              {0.45f, 0.30f, 0.55f}, {0.35f, 0.35f, 0.38f}};
+
+// Slab test of a ray against an axis-aligned box [lo, hi] in box coordinates; returns the entry
+// distance (or +inf) and the axis of the entry face.
+double SlabEntry(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
+                 const Eigen::Vector3d& hi, int* axis) {
+  double t_near = -std::numeric_limits<double>::infinity();
+  double t_far = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(d[k]) < 1e-12) {
+      if (o[k] < lo[k] || o[k] > hi[k]) return std::numeric_limits<double>::infinity();
+      continue;
+    }
+    double t0 = (lo[k] - o[k]) / d[k], t1 = (hi[k] - o[k]) / d[k];
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t_near) {
+      t_near = t0;
+      *axis = k;
+    }
+    t_far = std::min(t_far, t1);
+  }
+  if (t_near > t_far || t_far <= 1e-9 || t_near <= 1e-9) return std::numeric_limits<double>::infinity();
+  return t_near;
+}
+
+}  // namespace
+
+SceneRenderer::SceneRenderer(const Scene& scene) : scene_(scene) {
+  const int ss = scene.render.supersample;
+  samples_ = ss * ss;
+  for (const RigCamera& cam : scene.rig.cameras) {
+    CameraRays r;
+    r.width = cam.model.width();
+    r.height = cam.model.height();
+    r.dirs.resize(static_cast<size_t>(r.width) * r.height * (samples_ + 1));
+    const Eigen::Matrix3d R = cam.vehicle_from_camera.R;
+    cv::parallel_for_(cv::Range(0, r.height), [&](const cv::Range& rows) {
+      for (int v = rows.start; v < rows.end; ++v) {
+        for (int u = 0; u < r.width; ++u) {
+          Eigen::Vector3f* out = &r.dirs[(static_cast<size_t>(v) * r.width + u) * (samples_ + 1)];
+          for (int s = 0; s <= samples_; ++s) {
+            // Sample 0 is the pixel centre; the others a regular ss x ss grid inside the pixel.
+            const double du = s == 0 ? 0.0 : ((s - 1) % ss + 0.5) / ss - 0.5;
+            const double dv = s == 0 ? 0.0 : ((s - 1) / ss + 0.5) / ss - 0.5;
+            Eigen::Vector3d ray;
+            if (cam.model.Unproject({u + du, v + dv}, &ray)) {
+              out[s] = (R * ray).cast<float>();
+            } else {
+              out[s].setConstant(std::numeric_limits<float>::quiet_NaN());
+            }
+          }
+        }
+      }
+    });
+    rays_.push_back(std::move(r));
+  }
+}
+
+FrameState SceneRenderer::StateAt(double t_s) const {
+  FrameState st;
+  st.t_s = t_s;
+  st.ego = scene_.EgoPoseAt(t_s);
+  st.world_from_vehicle = st.ego.ToPose3();
+  for (const SceneObject& o : scene_.objects) {
+    BoxInstance b;
+    b.id = o.id;
+    b.object = &o;
+    b.world = o.PoseAt(t_s);
+    b.centre_xz = WorldToBody(st.ego, {b.world.x_m, b.world.z_m});
+    b.heading_rad = b.world.heading_rad - st.ego.heading_rad;
+    st.boxes.push_back(b);
+  }
+  return st;
+}
+
+RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
+                           const Eigen::Vector3d& d) const {
+  RayHit best;
+  double best_t = std::numeric_limits<double>::infinity();
+  if (d.y() > 1e-12 && o.y() < 0.0) {  // the ground plane Y = 0 (Y points down)
+    best_t = -o.y() / d.y();
+    best.id = kIdGround;
+  }
+  // The own car, fixed in the vehicle frame.
+  const Vehicle& car = scene_.rig.vehicle;
+  int axis = 0;
+  const double hw = car.width_m / 2, hl = car.length_m / 2;
+  const double t_car = std::min(
+      SlabEntry(o, d, {-hw, -kOwnBodyHeightM, -hl}, {hw, 0.0, hl}, &axis),
+      SlabEntry(o, d,
+                {-hw + kOwnCabinInsetM, -kOwnCabinHeightM, kOwnCabinRearFraction * car.length_m},
+                {hw - kOwnCabinInsetM, 0.0, kOwnCabinFrontFraction * car.length_m}, &axis));
+  if (t_car < best_t) {
+    best_t = t_car;
+    best.id = kIdOwnCar;
+  }
+  for (size_t i = 0; i < st.boxes.size(); ++i) {
+    const BoxInstance& b = st.boxes[i];
+    const SceneObject& obj = *b.object;
+    // Box coordinates: x across (right), y down, z along the heading; origin at the footprint
+    // centre on the ground.
+    const double c = std::cos(b.heading_rad), s = std::sin(b.heading_rad);
+    const Eigen::Vector3d rel(o.x() - b.centre_xz.x(), o.y(), o.z() - b.centre_xz.y());
+    const Eigen::Vector3d ol(c * rel.x() - s * rel.z(), rel.y(), s * rel.x() + c * rel.z());
+    const Eigen::Vector3d dl(c * d.x() - s * d.z(), d.y(), s * d.x() + c * d.z());
+    const double t = SlabEntry(ol, dl, {-obj.width_m / 2, -obj.height_m, -obj.length_m / 2},
+                               {obj.width_m / 2, 0.0, obj.length_m / 2}, &axis);
+    if (t < best_t) {
+      best_t = t;
+      best.id = static_cast<std::uint16_t>(kIdObjectBase + b.id);
+      best.box = static_cast<int>(i);
+      const Eigen::Vector3d p = ol + t * dl;
+      best.face = axis == 0 ? 0 : axis == 2 ? 1 : 2;
+      best.face_a_m = axis == 0 ? p.z() : p.x();
+      best.face_h_m = -p.y();
+    }
+  }
+  if (!std::isfinite(best_t)) {
+    best.id = kIdSky;
+    return best;
+  }
+  best.distance_m = best_t;
+  best.point_vehicle = o + best_t * d;
+  if (best.id == kIdGround) {
+    // Paint or asphalt: decided in world coordinates.
+    best.point_world = st.world_from_vehicle.Apply(best.point_vehicle);
+    const double x = best.point_world.x(), z = best.point_world.z();
+    bool paint = false;
+    if (scene_.road.enabled) {
+      const RoadMarkings& r = scene_.road;
+      const double half = r.marking_width_m / 2;
+      for (int k = -r.lanes_left; k <= r.lanes_right + 1 && !paint; ++k) {
+        const double line_x = r.ego_lane_center_x_m + (k - 0.5) * r.lane_width_m;
+        if (std::abs(x - line_x) > half) continue;
+        const bool edge = k == -r.lanes_left || k == r.lanes_right + 1;
+        const double period = r.dash_length_m + r.dash_gap_m;
+        paint = edge || std::fmod(std::fmod(z, period) + period, period) < r.dash_length_m;
+      }
+    }
+    for (const PaintedLine& l : scene_.lines) {
+      if (paint) break;
+      const Eigen::Vector2d a = l.from_xz, ab = l.to_xz - l.from_xz;
+      const double u = std::clamp((Eigen::Vector2d(x, z) - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+      paint = (Eigen::Vector2d(x, z) - (a + u * ab)).norm() <= l.width_m / 2;
+    }
+    if (paint) best.id = kIdPaint;
+  }
+  return best;
+}
+
+cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, const RayHit& hit,
+                               const Eigen::Vector3d& light) const {
+  const auto seed = static_cast<std::uint32_t>(scene_.seed * 2654435761u);
+  switch (hit.id) {
+    case kIdSky: {
+      const float e = static_cast<float>(std::clamp(-d.y(), 0.0, 1.0));
+      return cv::Vec3f(0.86f, 0.82f, 0.76f) * (1 - e) + cv::Vec3f(0.80f, 0.58f, 0.35f) * e;
+    }
+    case kIdOwnCar: {
+      const double n = Fbm(hit.point_vehicle.x() + hit.point_vehicle.y(), hit.point_vehicle.z(), 0.3, 2, seed + 5);
+      return cv::Vec3f::all(static_cast<float>(0.12 + 0.08 * n));
+    }
+    case kIdGround:
+    case kIdPaint: {
+      const Eigen::Vector3d& w = hit.point_world;
+      const double n = Fbm(w.x(), w.z(), 0.8, 4, seed + 11);
+      if (hit.id == kIdPaint) return cv::Vec3f::all(static_cast<float>(0.78 + 0.12 * n));
+      // Asphalt: patches at 0.8 m, and aggregate at 0.25 m and 0.06 m that correlation stereo
+      // can lock on to (real asphalt is textured down to the pixel).
+      const double mid = Fbm(w.x(), w.z(), 0.25, 2, seed + 23);
+      const double grain = Fbm(w.x(), w.z(), 0.06, 2, seed + 37);
+      const float g = static_cast<float>(0.30 + 0.14 * (n - 0.5) + 0.16 * (mid - 0.5) + 0.14 * (grain - 0.5));
+      return cv::Vec3f(g, g * 1.01f, g * 1.03f);
+    }
+    default: break;
+  }
+  const BoxInstance& b = st.boxes[hit.box];
+  const SceneObject& obj = *b.object;
+  const std::uint32_t oseed = seed + 7919u * static_cast<std::uint32_t>(obj.id) + 131u * hit.face;
+  const double a = hit.face_a_m, h = hit.face_h_m;
+  cv::Vec3f base = kPalette[static_cast<size_t>(obj.colour) % (sizeof(kPalette) / sizeof(kPalette[0]))];
+  base *= static_cast<float>(obj.brightness / 0.6);
+  // Surface detail for correlation stereo: noise at 0.25 m and at 0.07 m (dirt, reflections).
+  const double detail = Fbm(a, h, 0.25, 3, oseed);
+  const double fine = Fbm(a, h, 0.07, 2, oseed + 71);
+  double tone = 0.75 + 0.6 * (detail - 0.5) + 0.35 * (fine - 0.5);
+  if (obj.kind == "car" || obj.kind == "truck") {
+    const double frac = h / obj.height_m;
+    if (hit.face != 2 && h < 0.35) {
+      // Tyres and sills: darker than the body but with structure (tread, rims, dirt), as real
+      // wheels have; a featureless band would hide where the vehicle meets the road.
+      const double tread = Fbm(a, h, 0.05, 2, oseed + 313);
+      tone = 0.10 + 0.30 * detail + 0.35 * (tread - 0.5) * 2.0 * 0.5;
+      base = cv::Vec3f::all(0.5f);
+    } else if (hit.face != 2 && obj.kind == "car" && frac > 0.6 && frac < 0.92) {
+      tone = 0.35 + 0.4 * detail;  // windows
+      base = cv::Vec3f(0.45f, 0.42f, 0.40f);
+    } else if (obj.kind == "truck" && std::fmod(std::abs(a) + 10.0, 0.6) < 0.08) {
+      tone *= 0.6;  // ribs of the box body
+    } else if (obj.kind == "car" && std::fmod(std::abs(a) + 10.0, 1.3) < 0.05) {
+      tone *= 0.65;  // panel gaps
+    }
+  } else if (obj.kind == "pole") {
+    tone = std::fmod(h, 0.5) < 0.25 ? 0.35 + 0.3 * detail : 0.9 + 0.1 * detail;
+  } else if (obj.kind == "wall") {
+    const double row = std::floor(h / 0.25);
+    const double col = (a + (static_cast<int>(row) % 2) * 0.3) / 0.6;
+    const bool mortar = h - row * 0.25 < 0.03 || col - std::floor(col) < 0.05;
+    tone = mortar ? 0.9 : 0.55 + 0.5 * Unit(Hash(static_cast<std::int64_t>(std::floor(col)),
+                                                 static_cast<std::int64_t>(row), oseed));
+  }
+  // Lambertian shading by the face normal (vehicle frame) against a light from above.
+  Eigen::Vector3d n(0, -1, 0);
+  if (hit.face != 2) {
+    const double c = std::cos(b.heading_rad), s = std::sin(b.heading_rad);
+    const Eigen::Vector3d along(s, 0, c), across(c, 0, -s);
+    n = hit.face == 0 ? across : along;
+    if (n.dot(d) > 0) n = -n;
+  }
+  const double shade = 0.55 + 0.45 * std::max(0.0, n.dot(light));
+  return base * static_cast<float>(tone * shade);
+}
+
+RenderedView SceneRenderer::Render(const FrameState& st, size_t camera_index,
+                                   int frame_index) const {
+  const CameraRays& r = rays_.at(camera_index);
+  const RigCamera& cam = scene_.rig.cameras[camera_index];
+  const Eigen::Vector3d origin = cam.vehicle_from_camera.t;
+  // A fixed sun in the world, expressed in the vehicle frame of this instant.
+  const Eigen::Vector3d light =
+      st.world_from_vehicle.R.transpose() * Eigen::Vector3d(-0.35, -1.0, 0.45).normalized();
+  RenderedView out;
+  out.image.create(r.height, r.width, CV_32FC3);
+  out.ids.create(r.height, r.width, CV_16U);
+  out.range_m.create(r.height, r.width, CV_32F);
+  cv::parallel_for_(cv::Range(0, r.height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      for (int u = 0; u < r.width; ++u) {
+        const Eigen::Vector3f* dirs = &r.dirs[(static_cast<size_t>(v) * r.width + u) * (samples_ + 1)];
+        cv::Vec3f colour(0, 0, 0);
+        for (int s = 1; s <= samples_; ++s) {
+          if (std::isnan(dirs[s].x())) continue;
+          const Eigen::Vector3d d = dirs[s].cast<double>();
+          colour += Shade(st, d, Cast(st, origin, d), light);
+        }
+        // Sub-samples outside the rim count as black: the rim is anti-aliased too.
+        out.image.at<cv::Vec3f>(v, u) = colour * (1.0f / samples_);
+        if (std::isnan(dirs[0].x())) {
+          out.ids.at<std::uint16_t>(v, u) = kIdNoRay;
+          out.range_m.at<float>(v, u) = 0.0f;
+        } else {
+          const RayHit hit = Cast(st, origin, dirs[0].cast<double>());
+          out.ids.at<std::uint16_t>(v, u) = hit.id;
+          out.range_m.at<float>(v, u) = static_cast<float>(hit.distance_m);
+        }
+      }
+    }
+  });
+  if (scene_.render.blur_sigma_px > 0.0) {
+    cv::GaussianBlur(out.image, out.image, cv::Size(), scene_.render.blur_sigma_px);
+  }
+  // Image noise: a Gaussian per pixel and channel from a hash of (seed, frame, camera, pixel), so
+  // that the result does not depend on how rows are split between threads.
+  const double sigma = scene_.render.noise_sigma / 255.0;
+  const std::uint32_t nseed = Hash(static_cast<std::uint32_t>(scene_.seed) ^
+                                   Hash(static_cast<std::uint32_t>(frame_index) * 2u + camera_index));
+  cv::Mat image8(r.height, r.width, CV_8UC3);
+  cv::parallel_for_(cv::Range(0, r.height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      for (int u = 0; u < r.width; ++u) {
+        const cv::Vec3f c = out.image.at<cv::Vec3f>(v, u);
+        cv::Vec3b& o = image8.at<cv::Vec3b>(v, u);
+        const bool dark = out.ids.at<std::uint16_t>(v, u) == kIdNoRay && c[0] + c[1] + c[2] == 0;
+        for (int k = 0; k < 3; ++k) {
+          double n = 0.0;
+          if (sigma > 0.0 && !dark) {
+            const std::uint32_t h1 = Hash(v * 8192 + u, k, nseed);
+            const double u1 = (Unit(h1) + 1e-9), u2 = Unit(Hash(h1));
+            n = sigma * std::sqrt(-2.0 * std::log(u1)) * std::cos(kTwoPi * u2);
+          }
+          o[k] = cv::saturate_cast<std::uint8_t>(std::lround(255.0 * (c[k] + n)));
+        }
+      }
+    }
+  });
+  out.image = image8;
+  return out;
+}
+
+}  // namespace dps
