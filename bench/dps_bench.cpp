@@ -18,15 +18,15 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "dps/map/occupancy_grid.h"
 #include "dps/camera/rig_io.h"
+#include "dps/map/occupancy_grid.h"
+#include "dps/map/surround_map.h"
+#include "dps/map/tracker.h"
+#include "dps/pipeline/surround_pipeline.h"
 #include "dps/stereo/sad_stereo.h"
+#include "dps/stereo/virtual_view.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/scene_renderer.h"
-#include "dps/map/surround_map.h"
-#include "dps/pipeline/surround_pipeline.h"
-#include "dps/map/tracker.h"
-#include "dps/stereo/virtual_view.h"
 
 namespace {
 
@@ -53,13 +53,24 @@ std::pair<double, double> MedianMs(int runs, const std::function<void()>& a, con
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string data = argc > 1 ? argv[1] : "data/real";
-  if (argc > 1 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
-    std::printf("usage: dps-bench [DATA_DIR [RIG [SCENE]]]   (DATA_DIR holds kitti_pair/, default data/real;\n"
-                "       RIG for the view timing, default data/rigs/omni_pair.yaml; SCENE for the pipeline,\n"
-                "       default data/scenes/lead_car.yaml; run from the source)\n");
-    return 0;
+  std::vector<std::string> args;
+  bool baseline_kernel = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--help" || a == "-h") {
+      std::printf("usage: dps-bench [--baseline-kernel] [DATA_DIR [RIG [SCENE]]]   (DATA_DIR holds kitti_pair/,\n"
+                  "       default data/real; RIG for the view timing, default data/rigs/omni_pair.yaml; SCENE\n"
+                  "       for the pipeline, default data/scenes/lead_car.yaml; run from the source)\n"
+                  "  --baseline-kernel   dps's matcher with its baseline instruction-set kernel, not AVX2\n");
+      return 0;
+    }
+    if (a == "--baseline-kernel") {
+      baseline_kernel = true;
+    } else {
+      args.push_back(a);
+    }
   }
+  const std::string data = args.size() > 0 ? args[0] : "data/real";
   const cv::Mat left = cv::imread(data + "/kitti_pair/imgKittyl.bmp", cv::IMREAD_GRAYSCALE);
   const cv::Mat right = cv::imread(data + "/kitti_pair/imgKitty.bmp", cv::IMREAD_GRAYSCALE);
   if (left.empty() || right.empty()) {
@@ -81,6 +92,7 @@ int main(int argc, char** argv) {
       o.num_disparities = c.d;
       o.left_right_check = lr;
       o.two_levels = levels == 2;
+      o.baseline_kernel = baseline_kernel;
       dps::SadStereoMatcher matcher(o);
       auto bm = cv::StereoBM::create(c.d, 9);
       bm->setDisp12MaxDiff(lr ? 1 : -1);
@@ -92,7 +104,7 @@ int main(int argc, char** argv) {
   }
 
   // View rectification: one cv::remap per view from the omni image (tables built once per rig).
-  const std::string rig_path = argc > 2 ? argv[2] : "data/rigs/omni_pair.yaml";
+  const std::string rig_path = args.size() > 1 ? args[1] : "data/rigs/omni_pair.yaml";
   const dps::Rig rig = dps::ReadRig(rig_path);
   std::printf("\n| omni size | view | view size | remap ms | table build ms |\n| --- | --- | --- | --- | --- |\n");
   for (const int scale : {1, 2}) {
@@ -119,7 +131,7 @@ int main(int argc, char** argv) {
   // up and once timed), front stereo, both side motion stereos, histograms, fusion, tracking, the
   // occupancy grid and the map picture; each frame interleaved with one cv::StereoBM call (D 64,
   // block 9) on the KITTI pair resized to the omni size.
-  const std::string scene_path = argc > 3 ? argv[3] : "data/scenes/lead_car.yaml";
+  const std::string scene_path = args.size() > 2 ? args[2] : "data/scenes/lead_car.yaml";
   std::printf("\n| omni size | views | front ms | sides ms | fusion ms | tracks ms | grid ms | picture ms | frame ms | frames/s | StereoBM ms | frame / BM |\n"
               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (const auto [ow, oh] : {std::pair{320, 240}, std::pair{640, 480}, std::pair{1024, 1024}}) {
@@ -140,7 +152,8 @@ int main(int argc, char** argv) {
       in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(std::max(0, f - 1)), in.t_s);
       inputs.push_back(in);
     }
-    const dps::PipelineOptions po = dps::DefaultPipelineOptions(scene.rig);
+    dps::PipelineOptions po = dps::DefaultPipelineOptions(scene.rig);
+    po.front.stereo.baseline_kernel = po.side.stereo.baseline_kernel = baseline_kernel;
     dps::SurroundPipeline pipeline(scene.rig, po);
     dps::Tracker tracker;
     dps::OccupancyGrid grid;

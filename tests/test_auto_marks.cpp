@@ -9,11 +9,11 @@
 
 #include "check.h"
 #include "dps/calib/auto_marks.h"
-#include "dps/util/error.h"
+#include "dps/calib/vanishing_points.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/scene_renderer.h"
 #include "dps/synth/synth.h"
-#include "dps/calib/vanishing_points.h"
+#include "dps/util/error.h"
 
 namespace {
 

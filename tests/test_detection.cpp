@@ -10,15 +10,15 @@
 #include <opencv2/imgproc.hpp>
 
 #include "check.h"
-#include "dps/detect/disparity_histogram.h"
-#include "dps/util/error.h"
-#include "dps/eval/evaluation.h"
-#include "dps/detect/front_detection.h"
 #include "dps/camera/rig_io.h"
+#include "dps/detect/disparity_histogram.h"
+#include "dps/detect/front_detection.h"
+#include "dps/eval/evaluation.h"
+#include "dps/pipeline/surround_pipeline.h"
 #include "dps/stereo/sad_stereo.h"
 #include "dps/synth/scene_io.h"
-#include "dps/pipeline/surround_pipeline.h"
 #include "dps/synth/synth.h"
+#include "dps/util/error.h"
 
 namespace {
 

@@ -8,12 +8,13 @@
 #include <opencv2/videoio.hpp>
 
 #include "check.h"
-#include "dps/util/csv.h"
+#include "dps/detect/detection_io.h"
 #include "dps/pipeline/drive_io.h"
 #include "dps/pipeline/drive_processing.h"
-#include "dps/util/error.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
+#include "dps/util/csv.h"
+#include "dps/util/error.h"
 
 namespace {
 

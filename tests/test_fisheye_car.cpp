@@ -14,8 +14,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "check.h"
-#include "dps/util/error.h"
 #include "dps/camera/rig_io.h"
+#include "dps/util/error.h"
 
 namespace {
 

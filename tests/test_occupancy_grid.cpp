@@ -5,8 +5,8 @@
 #include <cstdio>
 
 #include "check.h"
-#include "dps/util/error.h"
 #include "dps/map/occupancy_grid.h"
+#include "dps/util/error.h"
 
 namespace {
 

@@ -10,12 +10,12 @@
 
 #include "check.h"
 #include "dps/map/occupancy_grid.h"
+#include "dps/pipeline/surround_pipeline.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/scene_renderer.h"
-#include "dps/util/error.h"
-#include "dps/pipeline/surround_pipeline.h"
 #include "dps/synth/synth.h"
 #include "dps/synth/truth.h"
+#include "dps/util/error.h"
 
 namespace {
 

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "check.h"
+#include "dps/camera/rig_io.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
-#include "dps/camera/rig_io.h"
 
 namespace {
 

@@ -16,15 +16,18 @@
 #include <string>
 
 #include "check.h"
-#include "dps/detect/detection.h"
-#include "dps/pipeline/drive_processing.h"
-#include "dps/eval/evaluation.h"
 #include "dps/camera/rig_io.h"
-#include "dps/synth/scene_io.h"
-#include "dps/pipeline/surround_pipeline.h"
-#include "dps/synth/synth.h"
+#include "dps/detect/detection.h"
+#include "dps/detect/detection_io.h"
+#include "dps/eval/evaluation.h"
 #include "dps/map/tracker.h"
+#include "dps/map/tracks_io.h"
+#include "dps/pipeline/drive_processing.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/synth.h"
 #include "dps/synth/truth.h"
+#include "dps/synth/truth_io.h"
 
 namespace {
 

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "check.h"
-#include "dps/synth/scene_io.h"
-#include "dps/synth/scene_renderer.h"
 #include "dps/detect/side_detection.h"
 #include "dps/pipeline/surround_pipeline.h"
+#include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
 #include "dps/synth/synth.h"
 #include "dps/synth/truth.h"
 

@@ -13,10 +13,10 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "check.h"
-#include "dps/util/csv.h"
-#include "dps/util/error.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
+#include "dps/util/csv.h"
+#include "dps/util/error.h"
 
 namespace {
 

@@ -9,8 +9,8 @@
 
 #include "check.h"
 #include "dps/detect/detection.h"
-#include "dps/util/error.h"
 #include "dps/map/tracker.h"
+#include "dps/util/error.h"
 
 namespace {
 

@@ -10,10 +10,11 @@
 #include <Eigen/Geometry>
 
 #include "check.h"
-#include "dps/util/error.h"
+#include "dps/calib/marks_io.h"
+#include "dps/calib/vanishing_points.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
-#include "dps/calib/vanishing_points.h"
+#include "dps/util/error.h"
 
 namespace {
 

@@ -15,9 +15,9 @@
 #include "check.h"
 #include "dps/camera/rig_io.h"
 #include "dps/stereo/sad_stereo.h"
+#include "dps/stereo/virtual_view.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/scene_renderer.h"
-#include "dps/stereo/virtual_view.h"
 
 namespace {
 

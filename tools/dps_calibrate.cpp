@@ -11,8 +11,9 @@
 
 #include "cli.h"
 #include "dps/calib/auto_marks.h"
-#include "dps/camera/rig_io.h"
+#include "dps/calib/marks_io.h"
 #include "dps/calib/vanishing_points.h"
+#include "dps/camera/rig_io.h"
 
 namespace {
 

@@ -3,11 +3,14 @@
 #include <iostream>
 
 #include "cli.h"
-#include "dps/util/atomic_file.h"
-#include "dps/eval/evaluation.h"
 #include "dps/camera/rig_io.h"
-#include "dps/pipeline/surround_pipeline.h"
+#include "dps/detect/detection_io.h"
+#include "dps/eval/evaluation.h"
 #include "dps/map/tracker.h"
+#include "dps/map/tracks_io.h"
+#include "dps/pipeline/surround_pipeline.h"
+#include "dps/synth/truth_io.h"
+#include "dps/util/atomic_file.h"
 
 namespace {
 

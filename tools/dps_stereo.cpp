@@ -5,9 +5,9 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli.h"
-#include "dps/util/atomic_file.h"
 #include "dps/stereo/disparity_io.h"
 #include "dps/stereo/sad_stereo.h"
+#include "dps/util/atomic_file.h"
 
 namespace {
 
@@ -27,6 +27,8 @@ must be non-negative), .pfm = float disparity, invalid = inf.
   --texture T           interest operator threshold (default 1)
   --no-lr-check         skip the left-right consistency check
   --one-level           skip the coarse level that fills low-texture areas
+  --baseline-kernel     the matcher's baseline instruction-set kernel even where AVX2 runs
+                        (the same disparities; for timing comparisons)
   --out FILE            disparity output
   --color FILE          also write a colour picture of the disparity (PNG/JPG)
   --help                this text
@@ -44,7 +46,7 @@ int main(int argc, char** argv) {
   return dps_cli::Run("dps-stereo", [&] {
     const dps_cli::Args args(argc, argv,
                              {"num-disparities", "min-disparity", "block", "uniqueness", "texture", "out", "color"},
-                             {"no-lr-check", "one-level"});
+                             {"no-lr-check", "one-level", "baseline-kernel"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -60,6 +62,7 @@ int main(int argc, char** argv) {
     o.texture_threshold = args.Number("texture", o.texture_threshold);
     o.left_right_check = !args.Has("no-lr-check");
     o.two_levels = !args.Has("one-level");
+    o.baseline_kernel = args.Has("baseline-kernel");
     const std::string out = args.Get("out");
     const bool png = out.size() >= 4 && out.compare(out.size() - 4, 4, ".png") == 0;
     if (png && o.min_disparity < 0) {

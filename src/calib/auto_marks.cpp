@@ -7,9 +7,9 @@
 #include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
 
-#include "dps/util/error.h"
 #include "dps/calib/vanishing_points.h"
 #include "dps/stereo/virtual_view.h"
+#include "dps/util/error.h"
 
 namespace dps {
 namespace {

@@ -7,8 +7,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "dps/util/error.h"
 #include "dps/stereo/sad_stereo.h"
+#include "dps/util/error.h"
 
 namespace dps {
 void HistogramOptions::Check() const {

@@ -11,13 +11,6 @@
 #include "dps/util/error.h"
 
 namespace dps {
-StereoOptions DetectionStereoOptions() {
-  StereoOptions o;
-  o.num_disparities = 64;
-  o.texture_threshold = 4.5;
-  return o;
-}
-
 FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options) : options_(options), rig_(rig) {
   options_.histogram.min_disparity = options.stereo.min_disparity;
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;

@@ -5,8 +5,8 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "dps/util/error.h"
 #include "dps/detect/front_detection.h"
+#include "dps/util/error.h"
 
 namespace dps {
 namespace {

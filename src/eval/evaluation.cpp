@@ -12,8 +12,6 @@
 namespace dps {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
@@ -57,23 +55,6 @@ std::vector<int> MatchNearestFirst(const std::vector<const TruthRow*>& objects, 
 }
 
 }  // namespace
-
-Eigen::Vector2d Sector::Vertex() const {
-  return apex + start_m * Eigen::Vector2d(std::sin(direction_rad), std::cos(direction_rad));
-}
-
-bool Sector::Contains(const Eigen::Vector2d& p) const {
-  const Eigen::Vector2d d = p - Vertex();
-  return std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) <= half_angle_rad;
-}
-
-bool Coverage::Contains(const Eigen::Vector2d& p) const {
-  if (sectors.empty()) return true;
-  for (const Sector& s : sectors) {
-    if (s.Contains(p)) return true;
-  }
-  return false;
-}
 
 double BandScore::Recall() const { return objects ? double(matched_objects) / objects : 1.0; }
 double BandScore::Precision() const { return detections ? double(matched_detections) / detections : 1.0; }

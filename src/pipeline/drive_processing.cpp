@@ -11,9 +11,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "dps/camera/rig_io.h"
+#include "dps/detect/detection_io.h"
+#include "dps/map/tracks_io.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
-#include "dps/camera/rig_io.h"
 
 namespace dps {
 namespace {

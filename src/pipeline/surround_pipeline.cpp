@@ -9,8 +9,8 @@
 
 #include <opencv2/core/utility.hpp>
 
-#include "dps/util/error.h"
 #include "dps/stereo/virtual_view.h"
+#include "dps/util/error.h"
 
 namespace dps {
 namespace {

@@ -9,9 +9,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "dps/stereo/sad_stereo.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
-#include "dps/stereo/sad_stereo.h"
 
 namespace dps {
 namespace {

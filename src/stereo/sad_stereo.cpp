@@ -84,17 +84,24 @@ struct SadStereoMatcher::Workspace {
 
 namespace internal {
 
-const SadKernel& BestSadKernel() {
+const SadKernel& BestSadKernel(bool baseline_only) {
 #ifdef DPS_HAVE_AVX2_KERNEL
-  // DPS_SIMD=baseline forces the baseline kernel (for comparisons and benchmarks).
-  const char* force = std::getenv("DPS_SIMD");
   static const bool has_avx2 = cv::checkHardwareSupport(CV_CPU_AVX2);
-  if (has_avx2 && !(force && std::string(force) == "baseline")) return avx2::kKernel;
+  if (has_avx2 && !baseline_only) return avx2::kKernel;
+#else
+  (void)baseline_only;
 #endif
   return baseline::kKernel;
 }
 
 }  // namespace internal
+
+StereoOptions DetectionStereoOptions() {
+  StereoOptions o;
+  o.num_disparities = 64;
+  o.texture_threshold = 4.5;
+  return o;
+}
 
 void StereoOptions::Check() const {
   const OptionCheck Require("stereo");
@@ -268,7 +275,7 @@ const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::M
   out.create(h, w, CV_32F);
   out.setTo(cv::Scalar(kInvalidDisparity));
 
-  const internal::SadKernel& kernel = internal::BestSadKernel();
+  const internal::SadKernel& kernel = internal::BestSadKernel(options_.baseline_kernel);
   internal::SadKernelInput in;
   in.left = left_log.ptr<std::uint8_t>();
   in.left_step = left_log.step;

@@ -45,13 +45,14 @@ struct SadKernelBuffers {
   float* row_disp = nullptr;
 };
 
-// The kernel the running CPU supports best: its lane count and its row matcher.
+// A compiled kernel: its lane count and its row matcher.
 struct SadKernel {
   const char* name;
   int lanes;  // n_padded must be a multiple of this
   void (*match_rows)(const SadKernelInput& in, int y0, int y1, const SadKernelBuffers& buf);
 };
-const SadKernel& BestSadKernel();
+// The kernel the running CPU supports best, or the baseline one when `baseline_only`.
+const SadKernel& BestSadKernel(bool baseline_only);
 
 namespace baseline {
 extern const SadKernel kKernel;

@@ -10,9 +10,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "dps/calib/marks_io.h"
+#include "dps/camera/rig_io.h"
+#include "dps/synth/truth_io.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
-#include "dps/camera/rig_io.h"
 
 namespace dps {
 namespace {

@@ -19,7 +19,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "dps/calib/marks_io.h"
+#include "dps/calib/marks.h"
 #include "dps/camera/rig.h"
 
 namespace dps {

@@ -19,8 +19,8 @@
 
 #include <Eigen/Core>
 
+#include "dps/calib/marks.h"
 #include "dps/camera/camera_model.h"
-#include "dps/calib/marks_io.h"
 #include "dps/camera/rig.h"
 
 namespace dps {

@@ -57,10 +57,4 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> detections, doub
                                          bool across_sources_only,
                                          const std::map<std::string, Eigen::Vector2d>& viewpoints = {});
 
-// detections.csv: header and one row per detection, written atomically. Throws dps::Error.
-void WriteDetections(const std::vector<Detection>& detections, const std::string& path);
-// Reads detections.csv (columns by name, extra columns ignored). Throws dps::Error naming the
-// file, line and column.
-std::vector<Detection> ReadDetections(const std::string& path);
-
 }  // namespace dps

@@ -15,18 +15,13 @@
 
 #include <opencv2/core.hpp>
 
+#include "dps/camera/rig.h"
 #include "dps/detect/detection.h"
 #include "dps/detect/disparity_histogram.h"
-#include "dps/camera/rig.h"
 #include "dps/stereo/sad_stereo.h"
 #include "dps/stereo/virtual_view.h"
 
 namespace dps {
-
-// The matcher settings the detectors use by default: 64 disparities, and an interest threshold of
-// 4.5 (on dps-synth renders, image noise of 2 grey levels on the uniform sky measures about 2.8,
-// the sky-road boundary 2.2, vehicles and asphalt 8-11).
-StereoOptions DetectionStereoOptions();
 
 struct FrontDetectorOptions {
   int view_width = 400;        // front view size, px

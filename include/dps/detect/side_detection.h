@@ -21,11 +21,11 @@
 
 #include <opencv2/core.hpp>
 
+#include "dps/camera/ego_motion.h"
+#include "dps/camera/rig.h"
+#include "dps/detect/coverage.h"
 #include "dps/detect/detection.h"
 #include "dps/detect/disparity_histogram.h"
-#include "dps/camera/ego_motion.h"
-#include "dps/eval/evaluation.h"
-#include "dps/camera/rig.h"
 #include "dps/stereo/sad_stereo.h"
 #include "dps/stereo/virtual_view.h"
 

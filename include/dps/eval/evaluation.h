@@ -2,7 +2,7 @@
 // tests do.
 //
 // Per frame, a truth object counts when its near point (the footprint point nearest to the
-// vehicle origin) lies within max_range_m and inside the processed field of view (Coverage); a
+// vehicle origin) lies within max_range_m and inside the processed field of view (Coverage, coverage.h); a
 // detection is in the zone under the same rule for its (x, z). A detection matches an object when
 // its (x, z) lies within max(0.75 m, 0.1 * range of the object's near point) of the footprint
 // (0 inside); pairs are taken nearest first, each object and each detection at most once: first
@@ -15,40 +15,17 @@
 // recall = matched counted objects / counted objects; precision = matched detections / detections
 // in the zone; range error = |detection range - near-point range| of the counted matches, per band
 // of the near point's range.
-//
-// Field of view: what the pipeline processes is sectors on the ground, each an apex (the
-// viewpoint, or the front pair's midpoint), a direction and a half-angle (for the front pair atan
-// of half the view width over the focal length, beginning ahead of its apex where both views
-// overlap; for a side view the span of the columns motion stereo matches). Without a coverage
-// every direction counts.
+
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
+#include "dps/detect/coverage.h"
 #include "dps/detect/detection.h"
 #include "dps/synth/truth.h"
 
 namespace dps {
-
-struct Sector {
-  std::string name;               // "front", "left", "right"
-  Eigen::Vector2d apex{0, 0};     // where the source looks from, vehicle frame (x, z)
-  double direction_rad = 0.0;     // from +Z towards +X
-  double half_angle_rad = 0.0;
-  // The sector begins this far ahead of the apex along its direction, at its vertex: a stereo
-  // pair sees only where both views overlap, from where their inner edges cross.
-  double start_m = 0.0;
-  Eigen::Vector2d Vertex() const;
-  bool Contains(const Eigen::Vector2d& point) const;
-};
-
-struct Coverage {
-  std::vector<Sector> sectors;  // empty = everything
-  bool Contains(const Eigen::Vector2d& point) const;
-};
 
 struct EvaluationOptions {
   double max_range_m = 20.0;   // > 0

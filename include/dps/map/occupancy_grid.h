@@ -17,9 +17,9 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "dps/detect/detection.h"
 #include "dps/camera/ego_motion.h"
-#include "dps/eval/evaluation.h"
+#include "dps/detect/coverage.h"
+#include "dps/detect/detection.h"
 
 namespace dps {
 

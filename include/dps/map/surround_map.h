@@ -8,10 +8,10 @@
 
 #include <opencv2/core.hpp>
 
-#include "dps/detect/detection.h"
-#include "dps/eval/evaluation.h"
-#include "dps/map/occupancy_grid.h"
 #include "dps/camera/rig.h"
+#include "dps/detect/coverage.h"
+#include "dps/detect/detection.h"
+#include "dps/map/occupancy_grid.h"
 #include "dps/map/tracker.h"
 
 namespace dps {

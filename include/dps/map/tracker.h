@@ -30,8 +30,8 @@
 
 #include <Eigen/Core>
 
-#include "dps/detect/detection.h"
 #include "dps/camera/ego_motion.h"
+#include "dps/detect/detection.h"
 
 namespace dps {
 
@@ -164,9 +164,5 @@ bool RegisterPoints(const std::vector<Eigen::Vector2d>& from, const std::vector<
 // The minimum-cost assignment of rows to columns (Hungarian method). cost: rows x cols; entries
 // >= `forbidden` may not be used. Returns for each row its column or -1.
 std::vector<int> HungarianAssignment(const std::vector<std::vector<double>>& cost, double forbidden);
-
-// tracks.csv (DESIGN.md §3.5) for the confirmed tracks, written atomically.
-void WriteTracks(const std::vector<TrackState>& tracks, const std::string& path);
-std::vector<TrackState> ReadTracks(const std::string& path);
 
 }  // namespace dps

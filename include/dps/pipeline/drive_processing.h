@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "dps/pipeline/drive_io.h"
 #include "dps/map/occupancy_grid.h"
 #include "dps/map/surround_map.h"
-#include "dps/pipeline/surround_pipeline.h"
 #include "dps/map/tracker.h"
+#include "dps/pipeline/drive_io.h"
+#include "dps/pipeline/surround_pipeline.h"
 
 namespace dps {
 

@@ -11,7 +11,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "dps/eval/evaluation.h"
+#include "dps/detect/coverage.h"
 #include "dps/detect/front_detection.h"
 #include "dps/detect/side_detection.h"
 

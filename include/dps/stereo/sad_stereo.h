@@ -51,10 +51,17 @@ struct StereoOptions {
   double left_right_max_diff = 1.0;  // px, >= 0
   bool two_levels = true;          // fill invalid pixels from a half-resolution level
   bool subpixel = true;            // equiangular (V) refinement
+  // The kernel built for the baseline instruction set even where the CPU runs the AVX2 one (both
+  // give the same disparities; for comparisons and benchmarks).
+  bool baseline_kernel = false;
 
   // Throws dps::Error naming the field, its value and the violated constraint.
   void Check() const;
 };
+
+// The matcher settings the detectors use by default: 64 disparities and an interest threshold of
+// 4.5 (image noise of 2 grey levels on a uniform area stays below it).
+StereoOptions DetectionStereoOptions();
 
 // The LoG band-pass prefilter of step 1: CV_8U in, CV_8U out with values 0..2 cap (cap = 0 LoG).
 cv::Mat LogPrefilter(const cv::Mat& grey, double sigma_px, double gain, int cap);

@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "dps/calib/marks_io.h"
-#include "dps/synth/truth.h"
+#include "dps/calib/marks.h"
 #include "dps/synth/scene.h"
 #include "dps/synth/scene_renderer.h"
+#include "dps/synth/truth.h"
 
 namespace dps {
 

@@ -1,4 +1,4 @@
-// dps — ground truth of synthetic or annotated drives: truth.csv (DESIGN.md §3.6).
+// dps — ground truth of synthetic or annotated drives: one object in one frame (DESIGN.md §3.6).
 #pragma once
 
 #include <string>
@@ -24,9 +24,5 @@ struct TruthRow {
 Eigen::Vector2d NearPoint(const TruthRow& object);
 // Distance from a ground point (x, z) to the footprint rectangle (0 inside it).
 double DistanceToFootprint(const TruthRow& object, const Eigen::Vector2d& point);
-
-// truth.csv, written atomically / read by column name. Throw dps::Error naming file and line.
-void WriteTruth(const std::vector<TruthRow>& rows, const std::string& path);
-std::vector<TruthRow> ReadTruth(const std::string& path);
 
 }  // namespace dps

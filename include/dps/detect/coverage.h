@@ -1,0 +1,32 @@
+// dps — the field of view on the ground: what the pipeline processes, as sectors, each an apex
+// (the viewpoint, or the front pair's midpoint), a direction and a half-angle (for the front pair
+// atan of half the view width over the focal length, beginning ahead of its apex where both views
+// overlap; for a side view the span of the columns motion stereo matches). Scoring, the grid and
+// the map use it; without a coverage every direction counts.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace dps {
+
+struct Sector {
+  std::string name;               // "front", "left", "right"
+  Eigen::Vector2d apex{0, 0};     // where the source looks from, vehicle frame (x, z)
+  double direction_rad = 0.0;     // from +Z towards +X
+  double half_angle_rad = 0.0;
+  // The sector begins this far ahead of the apex along its direction, at its vertex: a stereo
+  // pair sees only where both views overlap, from where their inner edges cross.
+  double start_m = 0.0;
+  Eigen::Vector2d Vertex() const;
+  bool Contains(const Eigen::Vector2d& point) const;
+};
+
+struct Coverage {
+  std::vector<Sector> sectors;  // empty = everything
+  bool Contains(const Eigen::Vector2d& point) const;
+};
+
+}  // namespace dps

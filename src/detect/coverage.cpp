@@ -1,0 +1,29 @@
+#include "dps/detect/coverage.h"
+
+#include <cmath>
+
+namespace dps {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+Eigen::Vector2d Sector::Vertex() const {
+  return apex + start_m * Eigen::Vector2d(std::sin(direction_rad), std::cos(direction_rad));
+}
+
+bool Sector::Contains(const Eigen::Vector2d& p) const {
+  const Eigen::Vector2d d = p - Vertex();
+  return std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) <= half_angle_rad;
+}
+
+bool Coverage::Contains(const Eigen::Vector2d& p) const {
+  if (sectors.empty()) return true;
+  for (const Sector& s : sectors) {
+    if (s.Contains(p)) return true;
+  }
+  return false;
+}
+
+}  // namespace dps

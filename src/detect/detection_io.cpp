@@ -1,0 +1,47 @@
+#include "dps/detect/detection_io.h"
+
+#include "dps/util/atomic_file.h"
+#include "dps/util/csv.h"
+
+namespace dps {
+
+void WriteDetections(const std::vector<Detection>& detections, const std::string& path) {
+  AtomicOutputFile out(path);
+  out.stream().precision(6);
+  out.stream() << std::fixed;
+  out.stream() << "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n";
+  for (const Detection& d : detections) {
+    out.stream() << d.frame << "," << d.t_s << "," << d.source << "," << d.id << "," << d.x_m << ","
+                 << d.z_m << "," << d.range_m << "," << d.x_min_m << "," << d.x_max_m << "," << d.z_min_m
+                 << "," << d.z_max_m << "," << d.n_points << "\n";
+  }
+  out.Commit();
+}
+
+std::vector<Detection> ReadDetections(const std::string& path) {
+  const CsvTable t = CsvTable::Read(path);
+  const int frame = t.Column("frame"), time = t.Column("t"), source = t.Column("source"), id = t.Column("id");
+  const int x = t.Column("x"), z = t.Column("z"), range = t.Column("range");
+  const int x_min = t.Column("x_min"), x_max = t.Column("x_max"), z_min = t.Column("z_min"), z_max = t.Column("z_max");
+  const int n = t.Column("n_points");
+  std::vector<Detection> out;
+  for (size_t r = 0; r < t.rows(); ++r) {
+    Detection d;
+    d.frame = static_cast<int>(t.Number(r, frame));
+    d.t_s = t.Number(r, time);
+    d.source = t.Text(r, source);
+    d.id = static_cast<int>(t.Number(r, id));
+    d.x_m = t.Number(r, x);
+    d.z_m = t.Number(r, z);
+    d.range_m = t.Number(r, range);
+    d.x_min_m = t.Number(r, x_min);
+    d.x_max_m = t.Number(r, x_max);
+    d.z_min_m = t.Number(r, z_min);
+    d.z_max_m = t.Number(r, z_max);
+    d.n_points = static_cast<int>(t.Number(r, n));
+    out.push_back(d);
+  }
+  return out;
+}
+
+}  // namespace dps
