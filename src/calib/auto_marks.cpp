@@ -61,9 +61,9 @@ std::vector<Paint> FindPaint(const cv::Mat& image, const Rig& rig, const RigCame
       p.pixel = Eigen::Vector2d(u, v);
       if (!cam.model.Unproject(p.pixel, &p.ray)) continue;
       const Eigen::Vector3d d = R * p.ray;
-      if (d.y() <= 1e-6 || t.y() >= 0) continue;  // at or above the horizon (Y points down)
-      const double s = -t.y() / d.y();
-      const Eigen::Vector3d g = t + s * d;
+      Eigen::Vector3d g;
+      if (!RayMeetsRoad(t, d, &g)) continue;  // at or above the horizon
+      const double s = -t.y() / d.y();        // g = t + s d
       p.ground = Eigen::Vector2d(g.x() - t.x(), g.z() - t.z());
       if (p.ground.norm() > o.max_range_m || HitsBox(t, d, lo, hi, s)) continue;
       paint.push_back(p);

@@ -63,4 +63,10 @@ double RotationAngleDeg(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
   return std::atan2(s, c) * 180.0 / 3.14159265358979323846;
 }
 
+bool RayMeetsRoad(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, Eigen::Vector3d* ground) {
+  if (direction.y() <= 1e-9 || origin.y() >= 0) return false;
+  *ground = origin + (-origin.y() / direction.y()) * direction;
+  return true;
+}
+
 }  // namespace dps

@@ -8,6 +8,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "dps/detect/ground_projection.h"
 #include "dps/util/error.h"
 
 namespace dps {
@@ -55,20 +56,8 @@ void FrontDetector::PrepareReferences() {
 
 void FrontDetector::Prepare(const cv::Mat& own_car, Reference* ref) const {
   const VirtualView& view = *ref->view;
-  const ViewSpec& spec = view.spec();
   cv::bitwise_or(own_car, view.mask() == 0, ref->ignore);
-  // The road's disparity at every pixel of the reference view.
-  ref->road = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(kInvalidDisparity));
-  const Eigen::Vector3d origin = view.viewpoint_vehicle();
-  for (int y = 0; y < spec.height; ++y) {
-    for (int x = 0; x < spec.width; ++x) {
-      const Eigen::Vector3d ray = view.RayVehicle(x, y);
-      if (ray.y() <= 1e-9 || origin.y() >= 0) continue;  // looks up: no road
-      const Eigen::Vector3d ground = origin + (-origin.y() / ray.y()) * ray;
-      const double depth = (spec.vehicle_from_view.transpose() * (ground - origin)).z();
-      if (depth > 0) ref->road.at<float>(y, x) = static_cast<float>(spec.focal_px * baseline_m_ / depth);
-    }
-  }
+  ref->road = RoadDisparity(view, baseline_m_);
   ref->ramp = RoadRamp(ref->road, options_.stereo.block_height / 2 + 1);
 }
 
@@ -77,18 +66,7 @@ bool FrontDetector::ColumnToGround(double x, double disparity, Eigen::Vector2d* 
 }
 
 bool FrontDetector::ColumnToGround(const VirtualView& view, double x, double disparity, Eigen::Vector2d* ground) const {
-  if (!(disparity > 0)) return false;
-  const ViewSpec& s = view.spec();
-  const double depth = s.focal_px * baseline_m_ / disparity;
-  const double lateral = (x - s.cx) * depth / s.focal_px;
-  // The view-frame point (lateral, h, depth) whose vehicle-frame height is 0 (the ground): the
-  // vertical line of the column at that depth, dropped onto the road (eq. 16).
-  const Eigen::Matrix3d& R = s.vehicle_from_view;
-  const Eigen::Vector3d& t = view.viewpoint_vehicle();
-  const double h = std::abs(R(1, 1)) > 1e-9 ? -(t.y() + R(1, 0) * lateral + R(1, 2) * depth) / R(1, 1) : 0.0;
-  const Eigen::Vector3d p = t + R * Eigen::Vector3d(lateral, h, depth);
-  *ground = Eigen::Vector2d(p.x(), p.z());
-  return true;
+  return dps::ColumnToGround(view, x, disparity, baseline_m_, ground);
 }
 
 bool FrontDetector::OuterPoint(const VirtualView& view, const HistogramComponent& c, bool last,

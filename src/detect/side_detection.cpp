@@ -5,21 +5,11 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "dps/detect/front_detection.h"
+#include "dps/detect/ground_projection.h"
 #include "dps/util/error.h"
 
 namespace dps {
 namespace {
-
-// Where a view pixel's ray meets the road, in the vehicle frame of the view; false above the
-// horizon.
-bool PixelToGround(const VirtualView& view, double x, double y, Eigen::Vector3d* ground) {
-  const Eigen::Vector3d o = view.viewpoint_vehicle();
-  const Eigen::Vector3d r = view.RayVehicle(x, y);
-  if (r.y() <= 1e-9 || o.y() >= 0) return false;
-  *ground = o + (-o.y() / r.y()) * r;
-  return true;
-}
 
 // The bottom-most matched pixel of an object often sits above its contact with the road: the
 // lowest part of a vehicle (wheels, the shadow under it) is dark and untextured, so it has no
@@ -52,10 +42,6 @@ double Median(std::vector<double> v) {
 }
 
 // The depth of a vehicle-frame point along the view's axis.
-double ViewDepth(const VirtualView& view, const Eigen::Vector3d& p) {
-  return (view.spec().vehicle_from_view.transpose() * (p - view.viewpoint_vehicle())).z();
-}
-
 // One column of a component: where it meets the road (view pixel and ground point), its depth
 // along the view axis, its disparity and its height above the road.
 struct Contact {
@@ -166,19 +152,10 @@ const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view
   const auto it = geometry_.find(key);
   if (it != geometry_.end()) return it->second;
   if (geometry_.size() > 64) geometry_.clear();  // a long turn through many yaws
-  const ViewSpec& spec = view.spec();
   ViewGeometry g;
   g.ignore = OwnCarMask(view, vehicle_, options_.own_car_height_m);
   cv::bitwise_or(g.ignore, view.mask() == 0, g.ignore);
-  g.inverse_depth = cv::Mat(spec.height, spec.width, CV_32F, cv::Scalar(0));
-  for (int y = 0; y < spec.height; ++y) {
-    for (int x = 0; x < spec.width; ++x) {
-      Eigen::Vector3d p;
-      if (!PixelToGround(view, x, y, &p)) continue;
-      const double depth = ViewDepth(view, p);
-      if (depth > 0) g.inverse_depth.at<float>(y, x) = static_cast<float>(1.0 / depth);
-    }
-  }
+  g.inverse_depth = RoadInverseDepth(view);
   return geometry_.emplace(key, std::move(g)).first->second;
 }
 
@@ -249,9 +226,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   last_key_ = current_key;
   last_valid_ = true;
   r.disparity.setTo(kInvalidDisparity, ignore);
-  // The road's disparity: f B / depth of the ground point along the view axis.
-  cv::Mat road = geometry.inverse_depth * (spec.focal_px * r.baseline_m);
-  road.setTo(kInvalidDisparity, geometry.inverse_depth == 0);
+  const cv::Mat road = RoadDisparity(geometry.inverse_depth, spec.focal_px, r.baseline_m);
   const HistogramOptions& ho = options_.histogram;
   r.score = ScoreImage(r.disparity, road, ho, RoadRamp(road, options_.stereo.block_height / 2 + 1));
   cv::Mat moments, labels;

@@ -34,6 +34,10 @@ struct Pose {
   Pose operator*(const Pose& other) const;
 };
 
+// Where the ray from `origin` along `direction` (vehicle frame) meets the road, the plane Y = 0
+// (Y points down): false when the origin is not above the road or the ray does not descend.
+bool RayMeetsRoad(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, Eigen::Vector3d* ground);
+
 // Size of the own vehicle, used to draw it on the map.
 struct Vehicle {
   double length_m = 4.8;  // > 0
