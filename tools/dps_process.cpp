@@ -1,16 +1,12 @@
 // dps-process: recorded drives -> detections.csv, surround-map video, summary.json.
 #include <unistd.h>
 
-#include <atomic>
-#include <chrono>
+#include <algorithm>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
-#include <mutex>
-#include <thread>
 
 #include "cli.h"
-#include "dps/pipeline/drive_processing.h"
+#include "dps/pipeline/batch.h"
 
 namespace {
 
@@ -44,6 +40,39 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --help                this text
 )";
 
+// Progress and results on stderr: a live line on a terminal when one drive runs at a time,
+// plain lines otherwise (every 25 frames); errors even when quiet.
+dps::BatchEvents Reporter(bool quiet, int jobs) {
+  dps::BatchEvents events;
+  events.failed = [](const std::string&, const std::string& error) {
+    std::cerr << "dps-process: error: " << error << std::endl;
+  };
+  if (quiet) return events;
+  const bool live = isatty(STDERR_FILENO) && jobs == 1;
+  events.progress = [live](const dps::BatchProgress& p) {
+    if (live) {
+      std::fprintf(stderr, "\rdps-process: drive %zu/%zu %s  frame %d/%d  %.1f frames/s  ETA %.0f s, all %.0f s   ",
+                   p.index, p.count, p.drive.c_str(), p.frame, p.frames, p.frames_per_second, p.drive_eta_s,
+                   p.batch_eta_s);
+      if (p.frame == p.frames) std::fprintf(stderr, "\n");
+    } else if (p.frame == p.frames || p.frame % 25 == 0) {
+      std::fprintf(stderr, "dps-process: drive %zu/%zu %s frame %d/%d (%.1f frames/s, ETA %.0f s, all %.0f s)\n",
+                   p.index, p.count, p.drive.c_str(), p.frame, p.frames, p.frames_per_second, p.drive_eta_s,
+                   p.batch_eta_s);
+    }
+  };
+  events.skipped = [](const std::string& out_dir) {
+    std::cerr << "dps-process: " << out_dir << " is complete; skipped (--force redoes it)\n";
+  };
+  events.finished = [](const dps::DriveSummary& s) {
+    std::cerr << "dps-process: " << s.output_dir << ": " << s.frames << " frames, " << s.detections << " detections, "
+              << s.frames_per_second << " frames/s";
+    if (!s.warnings.empty()) std::cerr << ", " << s.warnings.size() << " warning(s) in summary.json";
+    std::cerr << "\n";
+  };
+  return events;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -59,19 +88,16 @@ int main(int argc, char** argv) {
     if (!args.Has("out")) throw dps::Error("missing --out OUT_DIR (see --help)");
     std::vector<std::string> drives = args.positional();
     if (args.Has("list")) {
-      std::ifstream in(args.Get("list"));
-      if (!in) throw dps::Error(args.Get("list") + ": cannot open");
-      for (std::string line; std::getline(in, line);) {
-        if (!line.empty() && line[0] != '#') drives.push_back(line);
-      }
+      for (const std::string& d : dps::ReadDriveList(args.Get("list"))) drives.push_back(d);
     }
     if (drives.empty()) throw dps::Error("no drives given (see --help)");
-    int shard = 0, shards = 1;
-    if (args.Has("shard") && (std::sscanf(args.Get("shard").c_str(), "%d/%d", &shard, &shards) != 2 || shards < 1 ||
-                              shard < 0 || shard >= shards)) {
-      throw dps::Error("option --shard: expected I/N with 0 <= I < N, got '" + args.Get("shard") + "'");
-    }
-    dps::DriveOptions options;
+    dps::BatchOptions batch;
+    batch.out_root = args.Get("out");
+    if (args.Has("shard")) dps::ParseShard(args.Get("shard"), &batch.shard, &batch.shards);
+    batch.jobs = args.Integer("jobs", 1);
+    if (batch.jobs < 1) throw dps::Error("option --jobs: expected >= 1");
+    batch.force = args.Has("force");
+    dps::DriveOptions& options = batch.drive;
     options.map_video = !args.Has("no-video");
     options.map_png = args.Has("map-png");
     options.diagnostics = args.Has("diagnostics");
@@ -85,81 +111,11 @@ int main(int argc, char** argv) {
     options.can.yaw_rate_scale = args.Number("yaw-scale", 1.0);
     options.can.yaw_rate_file = args.Get("yaw-file");
     options.can.yaw_rate_time_column = options.can.time_column;
-    const bool quiet = args.Has("quiet"), tty = isatty(STDERR_FILENO);
-    const int jobs = args.Integer("jobs", 1);
-    if (jobs < 1) throw dps::Error("option --jobs: expected >= 1");
-    std::vector<std::string> mine;
-    for (size_t i = 0; i < drives.size(); ++i) {
-      if (static_cast<int>(i % shards) == shard) mine.push_back(drives[i]);
+    const dps::BatchResult result = dps::RunBatch(drives, batch, Reporter(args.Has("quiet"), batch.jobs));
+    if (!args.Has("quiet")) {
+      std::cerr << "dps-process: " << result.processed << " processed, " << result.skipped << " skipped, "
+                << result.failed << " failed\n";
     }
-    std::atomic<int> failed{0}, done{0}, skipped{0};
-    std::atomic<size_t> next{0};
-    std::mutex print;
-    // The whole batch's progress for its ETA: each drive's done fraction (under `print`).
-    const auto batch_start = std::chrono::steady_clock::now();
-    std::vector<double> fraction(mine.size(), 0.0);
-    const auto batch_eta = [&] {
-      double sum = 0;
-      for (const double f : fraction) sum += f;
-      const double share = sum / std::max<size_t>(1, mine.size());
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - batch_start).count();
-      return share > 0 ? s * (1 - share) / share : 0.0;
-    };
-    auto worker = [&] {
-      for (size_t i = next++; i < mine.size(); i = next++) {
-        const std::string& drive = mine[i];
-        const std::string out_dir = dps::DriveOutputDir(drive, args.Get("out"));
-        if (!args.Has("force") && dps::DriveOutputComplete(out_dir)) {
-          ++skipped;
-          std::lock_guard<std::mutex> lock(print);
-          fraction[i] = 1.0;
-          if (!quiet) std::cerr << "dps-process: " << out_dir << " is complete; skipped (--force redoes it)\n";
-          continue;
-        }
-        const auto start = std::chrono::steady_clock::now();
-        // A live line on a terminal when one drive runs at a time; plain lines otherwise.
-        const bool live = tty && jobs == 1;
-        auto progress = [&](int f, int total) {
-          if (quiet) return;
-          const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-          const double fps = f / std::max(s, 1e-9);
-          std::lock_guard<std::mutex> lock(print);
-          fraction[i] = total > 0 ? static_cast<double>(f) / total : 1.0;
-          const double drive_eta = (total - f) / std::max(fps, 1e-9), all_eta = batch_eta();
-          if (live) {
-            std::fprintf(stderr, "\rdps-process: drive %zu/%zu %s  frame %d/%d  %.1f frames/s  ETA %.0f s, all %.0f s   ",
-                         i + 1, mine.size(), drive.c_str(), f, total, fps, drive_eta, all_eta);
-            if (f == total) std::fprintf(stderr, "\n");
-          } else if (f == total || f % 25 == 0) {
-            std::fprintf(stderr, "dps-process: drive %zu/%zu %s frame %d/%d (%.1f frames/s, ETA %.0f s, all %.0f s)\n",
-                         i + 1, mine.size(), drive.c_str(), f, total, fps, drive_eta, all_eta);
-          }
-        };
-        try {
-          const dps::DriveSummary s = dps::ProcessDrive(drive, args.Get("out"), options, progress);
-          ++done;
-          std::lock_guard<std::mutex> lock(print);
-          if (!quiet) {
-            std::cerr << "dps-process: " << s.output_dir << ": " << s.frames << " frames, " << s.detections
-                      << " detections, " << s.frames_per_second << " frames/s";
-            if (!s.warnings.empty()) std::cerr << ", " << s.warnings.size() << " warning(s) in summary.json";
-            std::cerr << "\n";
-          }
-        } catch (const std::exception& e) {
-          ++failed;
-          std::lock_guard<std::mutex> lock(print);
-          fraction[i] = 1.0;
-          std::cerr << "dps-process: error: " << e.what() << std::endl;
-        }
-      }
-    };
-    std::vector<std::thread> threads;
-    for (int j = 1; j < jobs; ++j) threads.emplace_back(worker);
-    worker();
-    for (std::thread& t : threads) t.join();
-    if (!quiet) {
-      std::cerr << "dps-process: " << done << " processed, " << skipped << " skipped, " << failed << " failed\n";
-    }
-    return std::min(failed.load(), 125);
+    return std::min(result.failed, 125);
   });
 }

@@ -69,207 +69,303 @@ bool DriveOutputComplete(const std::string& output_dir) {
   return fs::exists(fs::path(output_dir) / "summary.json");
 }
 
+namespace {
+
+// A drive's inputs: the rig, both image streams, frame times and the CAN log.
+struct DriveInput {
+  Rig rig;
+  std::unique_ptr<FrameSource> left, right;
+  int frames = 0;
+  std::vector<double> times;
+  CanLog can;
+};
+
+DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveSummary* s) {
+  if (!fs::is_directory(drive_dir)) throw Error(Str(drive_dir, ": not a folder"));
+  DriveInput in;
+  in.rig = ReadRig((fs::path(drive_dir) / "rig.yaml").string());
+  in.left = FrameSource::Open(drive_dir, "left");
+  in.right = FrameSource::Open(drive_dir, "right");
+  in.frames = in.left->count();
+  if (in.left->count() != in.right->count()) {
+    if (!o.truncate) {
+      throw Error(Str(drive_dir, ": ", in.left->description(), " has ", in.left->count(), " frames, ",
+                      in.right->description(), " has ", in.right->count(), " (--truncate uses the shorter)"));
+    }
+    in.frames = std::min(in.left->count(), in.right->count());
+    s->warnings.push_back(Str("left and right differ in length; truncated to ", in.frames, " frames"));
+  }
+  const fs::path frames_csv = fs::path(drive_dir) / "frames.csv";
+  if (fs::exists(frames_csv)) {
+    in.times = ReadFrameTimes(frames_csv.string());
+    if (static_cast<int>(in.times.size()) < in.frames) {
+      throw Error(Str(frames_csv.string(), ": ", in.times.size(), " frames listed, the videos have ", in.frames));
+    }
+  } else {
+    const double fps = in.left->fps() > 0 ? in.left->fps() : o.image_fps;
+    for (int i = 0; i < in.frames; ++i) in.times.push_back(i / fps);
+  }
+  in.can = ReadCanLog((fs::path(drive_dir) / "can.csv").string(), o.can);
+  for (const std::string& w : in.can.warnings) s->warnings.push_back(w);
+  return in;
+}
+
+// The pictures a drive writes into its temporary folder: the map video (H.264 in MP4 where
+// OpenCV has an encoder for it, a fiftieth of MJPG's size on these pictures, else MPEG-4 part 2
+// in MP4, else MJPG in AVI, else PNGs with a warning), map PNGs and the diagnostics video.
+class PictureOutputs {
+ public:
+  PictureOutputs(const fs::path& tmp, const DriveOptions& o, const DriveInput& in, DriveSummary* s)
+      : tmp_(tmp), options_(o), output_dir_(s->output_dir), diagnostics_tmp_((tmp / ".diagnostics.tmp.avi").string()) {
+    if (o.map_video) OpenVideo(in, s);
+    png_ = o.map_png || (o.map_video && !video_.isOpened());
+    if (png_) fs::create_directories(tmp / "map");
+  }
+
+  // True when the frame's map picture is wanted (--no-video without PNGs: the CSVs alone).
+  bool WantsMap() const { return video_.isOpened() || png_; }
+
+  void WriteMap(const cv::Mat& map, int f) {
+    if (video_.isOpened()) video_.write(map);
+    if (png_) {
+      char name[32];
+      std::snprintf(name, sizeof(name), "%06d.png", f);
+      if (!cv::imwrite((tmp_ / "map" / name).string(), map)) throw Error(Str(output_dir_, ": cannot write map image"));
+    }
+  }
+
+  // The six diagnostic panels of each source, side by side; frame `middle`'s also as a PNG.
+  void WriteDiagnostics(const FrameOutput& out, const PipelineOptions& po, int f, int middle) {
+    const cv::Size panel(po.front.view_width, po.front.view_height);
+    const double fd0 = po.front.stereo.min_disparity, fd1 = fd0 + po.front.stereo.num_disparities;
+    const double sd0 = po.side.stereo.min_disparity, sd1 = sd0 + po.side.stereo.num_disparities;
+    cv::Mat all;
+    cv::hconcat(std::vector<cv::Mat>{
+                    DrawDiagnostics("front (left view)", out.front.left_view, out.front.right_view,
+                                    out.front.by_left.disparity, out.front.by_left.histogram,
+                                    out.front.by_left.obstacle, fd0, fd1, panel),
+                    DrawDiagnostics("front (right view)", out.front.right_view, out.front.left_view,
+                                    out.front.by_right.disparity, out.front.by_right.histogram,
+                                    out.front.by_right.obstacle, fd0, fd1, panel),
+                    DrawDiagnostics("left", out.left.reference_view, out.left.other_view, out.left.disparity,
+                                    out.left.histogram, out.left.obstacle, sd0, sd1, panel),
+                    DrawDiagnostics("right", out.right.reference_view, out.right.other_view, out.right.disparity,
+                                    out.right.histogram, out.right.obstacle, sd0, sd1, panel)},
+                all);
+    if (!diagnostics_.isOpened()) {
+      diagnostics_.open(diagnostics_tmp_, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, all.size());
+      if (!diagnostics_.isOpened()) throw Error(Str(output_dir_, ": cannot open a video writer for diagnostics"));
+    }
+    diagnostics_.write(all);
+    if (f == middle) cv::imwrite((tmp_ / "diagnostics_middle.png").string(), all);
+  }
+
+  // Closes the videos under their final names in the temporary folder.
+  void Close() {
+    if (video_.isOpened()) {
+      video_.release();
+      RenameReplacing(video_tmp_, (tmp_ / video_name_).string());
+    }
+    if (diagnostics_.isOpened()) {
+      diagnostics_.release();
+      RenameReplacing(diagnostics_tmp_, (tmp_ / "diagnostics.avi").string());
+    }
+  }
+
+ private:
+  void OpenVideo(const DriveInput& in, DriveSummary* s) {
+    const int frames = in.frames;
+    const std::vector<double>& times = in.times;
+    const double fps = frames > 1 ? std::max(1.0, (frames - 1) / std::max(1e-6, times[frames - 1] - times[0])) : 10.0;
+    const struct {
+      const char* name;
+      const char* codec;
+      int fourcc;
+    } formats[] = {{"map.mp4", "H.264", cv::VideoWriter::fourcc('a', 'v', 'c', '1')},
+                   {"map.mp4", "MPEG-4 part 2", cv::VideoWriter::fourcc('m', 'p', '4', 'v')},
+                   {"map.avi", "MJPG", cv::VideoWriter::fourcc('M', 'J', 'P', 'G')}};
+    for (const auto& f : formats) {
+      video_name_ = f.name;
+      video_tmp_ = (tmp_ / (".tmp." + video_name_)).string();  // the extension picks the container
+      if (video_.open(video_tmp_, f.fourcc, fps, cv::Size(options_.map.size_px, options_.map.size_px))) {
+        s->map_video = Str(f.name, " (", f.codec, ")");
+        break;
+      }
+    }
+    if (!video_.isOpened()) s->warnings.push_back("no video encoder; writing map/ PNGs instead");
+  }
+
+  fs::path tmp_;
+  const DriveOptions& options_;
+  std::string output_dir_;
+  cv::VideoWriter video_, diagnostics_;
+  std::string video_tmp_, video_name_, diagnostics_tmp_;
+  bool png_ = false;
+};
+
+// One drive's run: the pipeline over its frames, then tracking, the grid, the map and the files.
+class DriveRun {
+ public:
+  DriveRun(const std::string& drive_dir, const DriveOptions& o, DriveInput& in, const fs::path& tmp, DriveSummary* s)
+      : drive_dir_(drive_dir),
+        o_(o),
+        in_(in),
+        tmp_(tmp),
+        s_(*s),
+        pipeline_options_(o.default_pipeline ? DefaultPipelineOptions(in.rig) : o.pipeline),
+        pipeline_(in.rig, pipeline_options_),
+        tracker_(o.tracker),
+        grid_(o.occupancy),
+        pictures_(tmp, o, in, s),
+        map_background_(DrawMapBackground(in.rig.vehicle, pipeline_.coverage(), o.map)) {}
+
+  void Run(const std::function<void(int, int)>& progress);
+  void WriteFiles();
+
+ private:
+  void Finish(FrameOutput& out, int f);
+  void Read(FrameSource& source, cv::Mat* image, int f);
+  FrameInput Input(const cv::Mat& l, const cv::Mat& r, int f);
+
+  const std::string& drive_dir_;
+  const DriveOptions& o_;
+  DriveInput& in_;
+  fs::path tmp_;
+  DriveSummary& s_;
+  const PipelineOptions pipeline_options_;
+  SurroundPipeline pipeline_;
+  std::vector<Detection> detections_;
+  Tracker tracker_;
+  std::vector<TrackState> tracks_;
+  PlanarPose ego_;  // the vehicle in the tracker's world (its pose at frame 0)
+  OccupancyGrid grid_;
+  PictureOutputs pictures_;
+  const cv::Mat map_background_;
+  cv::Mat map_;  // the frame's map picture, drawn into the same buffer every frame
+  double decode_ = 0, front_ = 0, sides_ = 0, map_s_ = 0, write_ = 0;
+  std::mutex decode_mutex_;
+};
+
+// What follows the stereo for one frame: tracking, the occupancy grid, the map picture and
+// writing. It runs alongside the next frame's stereo (SurroundPipeline::Process), in order.
+void DriveRun::Finish(FrameOutput& out, int f) {
+  auto t2 = Clock::now();
+  const std::vector<TrackState> frame_tracks = tracker_.Update(f, in_.times[f], ego_, out.detections);
+  char caption[128];
+  std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), f, in_.times[f],
+                out.detections.size());
+  grid_.Update(ego_, out.coverage, out.detections);
+  if (pictures_.WantsMap()) {
+    DrawFrameMap(map_background_, grid_, in_.rig.vehicle, out.detections, frame_tracks, o_.map, caption, map_);
+  }
+  for (const TrackState& t : frame_tracks) {
+    if (t.confirmed) tracks_.push_back(t);
+  }
+  auto t3 = Clock::now();
+  map_s_ += Seconds(t2, t3);
+  if (pictures_.WantsMap()) pictures_.WriteMap(map_, f);
+  if (o_.diagnostics) pictures_.WriteDiagnostics(out, pipeline_options_, f, in_.frames / 2);
+  write_ += Seconds(t3, Clock::now());
+  for (Detection& d : out.detections) detections_.push_back(std::move(d));
+}
+
+// Decoding: frame f + 1's two images are read alongside frame f's stereo, each by its own task
+// (seconds summed over both).
+void DriveRun::Read(FrameSource& source, cv::Mat* image, int f) {
+  const auto t0 = Clock::now();
+  if (!source.Read(image)) throw Error(Str(drive_dir_, ": frame ", f, " could not be read (the stream ended early)"));
+  const double seconds = Seconds(t0, Clock::now());
+  std::lock_guard<std::mutex> lock(decode_mutex_);
+  decode_ += seconds;
+}
+
+// Frame f's images checked against each other and the rig, with the motion since frame f - 1.
+FrameInput DriveRun::Input(const cv::Mat& l, const cv::Mat& r, int f) {
+  const CameraModel& model = in_.rig.Camera("left").model;
+  if (l.size() != r.size()) {
+    throw Error(Str(drive_dir_, ": frame ", f, ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
+  }
+  if (l.cols != model.width() || l.rows != model.height()) {
+    throw Error(Str(drive_dir_, ": frame ", f, " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
+                    model.width(), "x", model.height()));
+  }
+  FrameInput input;
+  input.frame = f;
+  input.t_s = in_.times[f];
+  input.left = l;
+  input.right = r;
+  if (f > 0) {
+    std::string why;
+    input.motion_known = MotionBetween(in_.can, in_.times[f - 1], in_.times[f], &input.current_in_previous, &why);
+    if (!input.motion_known) {
+      ++s_.frames_without_motion;
+      s_.warnings.push_back(Str("frame ", f, ": no known motion (", why, "); side detection skipped"));
+    }
+  }
+  return input;
+}
+
+void DriveRun::Run(const std::function<void(int, int)>& progress) {
+  const int frames = in_.frames;
+  FrameOutput pending;  // the previous frame's, not yet finished
+  cv::Mat l, r, next_l, next_r;
+  if (frames > 0) {
+    Read(*in_.left, &l, 0);
+    Read(*in_.right, &r, 0);
+  }
+  for (int f = 0; f < frames; ++f) {
+    const FrameInput input = Input(l, r, f);
+    std::vector<std::function<void()>> alongside;
+    if (f > 0) alongside.push_back([&] { Finish(pending, f - 1); });
+    if (f + 1 < frames) {
+      alongside.push_back([&] { Read(*in_.left, &next_l, f + 1); });
+      alongside.push_back([&] { Read(*in_.right, &next_r, f + 1); });
+    }
+    FrameOutput out = pipeline_.Process(input, alongside);
+    if (input.motion_known) ego_ = Compose(ego_, input.current_in_previous);
+    s_.front_vertical_offset_px = out.front.vertical_offset_px;
+    front_ += out.front_ms / 1000.0;
+    sides_ += out.sides_ms / 1000.0;
+    pending = std::move(out);
+    std::swap(l, next_l);
+    std::swap(r, next_r);
+    if (progress && f > 0) progress(f, frames);
+  }
+  if (frames > 0) Finish(pending, frames - 1);
+  if (progress && frames > 0) progress(frames, frames);
+}
+
+void DriveRun::WriteFiles() {
+  auto t4 = Clock::now();
+  pictures_.Close();
+  WriteDetections(detections_, (tmp_ / "detections.csv").string());
+  WriteTracks(tracks_, (tmp_ / "tracks.csv").string());
+  write_ += Seconds(t4, Clock::now());
+  s_.frames = in_.frames;
+  s_.detections = static_cast<int>(detections_.size());
+  s_.stage_seconds = {{"decode", decode_}, {"front", front_}, {"sides", sides_}, {"map", map_s_}, {"write", write_}};
+}
+
+}  // namespace
+
 DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_root, const DriveOptions& o,
                           const std::function<void(int, int)>& progress) {
   const auto start = Clock::now();
   DriveSummary s;
   s.output_dir = DriveOutputDir(drive_dir, out_root);
   s.drive = fs::path(s.output_dir).filename().string();
-  if (!fs::is_directory(drive_dir)) throw Error(Str(drive_dir, ": not a folder"));
-  const Rig rig = ReadRig((fs::path(drive_dir) / "rig.yaml").string());
-  std::unique_ptr<FrameSource> left = FrameSource::Open(drive_dir, "left");
-  std::unique_ptr<FrameSource> right = FrameSource::Open(drive_dir, "right");
-  int frames = left->count();
-  if (left->count() != right->count()) {
-    if (!o.truncate) {
-      throw Error(Str(drive_dir, ": ", left->description(), " has ", left->count(), " frames, ",
-                      right->description(), " has ", right->count(), " (--truncate uses the shorter)"));
-    }
-    frames = std::min(left->count(), right->count());
-    s.warnings.push_back(Str("left and right differ in length; truncated to ", frames, " frames"));
-  }
-  // Frame times.
-  std::vector<double> times;
-  const fs::path frames_csv = fs::path(drive_dir) / "frames.csv";
-  if (fs::exists(frames_csv)) {
-    times = ReadFrameTimes(frames_csv.string());
-    if (static_cast<int>(times.size()) < frames) {
-      throw Error(Str(frames_csv.string(), ": ", times.size(), " frames listed, the videos have ", frames));
-    }
-  } else {
-    const double fps = left->fps() > 0 ? left->fps() : o.image_fps;
-    for (int i = 0; i < frames; ++i) times.push_back(i / fps);
-  }
-  const CanLog can = ReadCanLog((fs::path(drive_dir) / "can.csv").string(), o.can);
-  for (const std::string& w : can.warnings) s.warnings.push_back(w);
-
+  DriveInput in = OpenDrive(drive_dir, o, &s);
   // Outputs under a temporary name.
   fs::create_directories(out_root);
   const fs::path tmp = fs::path(out_root) / Str(".", s.drive, ".tmp-", ::getpid());
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   try {
-    const PipelineOptions pipeline_options = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
-    SurroundPipeline pipeline(rig, pipeline_options);
-    std::vector<Detection> detections;
-    Tracker tracker(o.tracker);
-    std::vector<TrackState> tracks;
-    PlanarPose ego;  // the vehicle in the tracker's world (its pose at frame 0)
-    OccupancyGrid grid(o.occupancy);
-    // The map video: H.264 in MP4 where OpenCV has an encoder for it (a fiftieth of MJPG's size
-    // on these pictures), else MPEG-4 part 2 in MP4, else MJPG in AVI, else PNGs with a warning.
-    cv::VideoWriter video;
-    std::string video_tmp, video_name;
-    if (o.map_video) {
-      const double fps = frames > 1 ? std::max(1.0, (frames - 1) / std::max(1e-6, times[frames - 1] - times[0])) : 10.0;
-      const struct {
-        const char* name;
-        const char* codec;
-        int fourcc;
-      } formats[] = {{"map.mp4", "H.264", cv::VideoWriter::fourcc('a', 'v', 'c', '1')},
-                     {"map.mp4", "MPEG-4 part 2", cv::VideoWriter::fourcc('m', 'p', '4', 'v')},
-                     {"map.avi", "MJPG", cv::VideoWriter::fourcc('M', 'J', 'P', 'G')}};
-      for (const auto& f : formats) {
-        video_name = f.name;
-        video_tmp = (tmp / (".tmp." + video_name)).string();  // the extension picks the container
-        if (video.open(video_tmp, f.fourcc, fps, cv::Size(o.map.size_px, o.map.size_px))) {
-          s.map_video = Str(f.name, " (", f.codec, ")");
-          break;
-        }
-      }
-      if (!video.isOpened()) s.warnings.push_back("no video encoder; writing map/ PNGs instead");
-    }
-    const bool png = o.map_png || (o.map_video && !video.isOpened());
-    const cv::Mat map_background = DrawMapBackground(rig.vehicle, pipeline.coverage(), o.map);
-    cv::Mat map;  // the frame's map picture, drawn into the same buffer every frame
-    cv::VideoWriter diagnostics;
-    const std::string diagnostics_tmp = (tmp / ".diagnostics.tmp.avi").string();
-    if (png) fs::create_directories(tmp / "map");
-    double decode = 0, front = 0, sides = 0, map_s = 0, write = 0;
-    std::mutex decode_mutex;
-    // What follows the stereo for one frame: tracking, the occupancy grid, the map picture and
-    // writing. It runs alongside the next frame's stereo (SurroundPipeline::Process), in order.
-    const auto finish = [&](FrameOutput& out, int f) {
-      auto t2 = Clock::now();
-      const std::vector<TrackState> frame_tracks = tracker.Update(f, times[f], ego, out.detections);
-      char caption[128];
-      std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s.drive.c_str(), f, times[f],
-                    out.detections.size());
-      grid.Update(ego, out.coverage, out.detections);
-      // The picture only when it is written (--no-video without PNGs: the CSVs alone).
-      if (video.isOpened() || png) {
-        DrawFrameMap(map_background, grid, rig.vehicle, out.detections, frame_tracks, o.map, caption, map);
-      }
-      for (const TrackState& t : frame_tracks) {
-        if (t.confirmed) tracks.push_back(t);
-      }
-      auto t3 = Clock::now();
-      map_s += Seconds(t2, t3);
-      if (video.isOpened()) video.write(map);
-      if (o.diagnostics) {
-        const PipelineOptions& po = pipeline_options;
-        const cv::Size panel(po.front.view_width, po.front.view_height);
-        const double fd0 = po.front.stereo.min_disparity, fd1 = fd0 + po.front.stereo.num_disparities;
-        const double sd0 = po.side.stereo.min_disparity, sd1 = sd0 + po.side.stereo.num_disparities;
-        cv::Mat all;
-        cv::hconcat(std::vector<cv::Mat>{
-                        DrawDiagnostics("front (left view)", out.front.left_view, out.front.right_view,
-                                        out.front.by_left.disparity, out.front.by_left.histogram,
-                                        out.front.by_left.obstacle, fd0, fd1, panel),
-                        DrawDiagnostics("front (right view)", out.front.right_view, out.front.left_view,
-                                        out.front.by_right.disparity, out.front.by_right.histogram,
-                                        out.front.by_right.obstacle, fd0, fd1, panel),
-                        DrawDiagnostics("left", out.left.reference_view, out.left.other_view, out.left.disparity,
-                                        out.left.histogram, out.left.obstacle, sd0, sd1, panel),
-                        DrawDiagnostics("right", out.right.reference_view, out.right.other_view, out.right.disparity,
-                                        out.right.histogram, out.right.obstacle, sd0, sd1, panel)},
-                    all);
-        if (!diagnostics.isOpened()) {
-          diagnostics.open(diagnostics_tmp, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, all.size());
-          if (!diagnostics.isOpened()) throw Error(Str(s.output_dir, ": cannot open a video writer for diagnostics"));
-        }
-        diagnostics.write(all);
-        if (f == frames / 2) cv::imwrite((tmp / "diagnostics_middle.png").string(), all);
-      }
-      if (png) {
-        char name[32];
-        std::snprintf(name, sizeof(name), "%06d.png", f);
-        if (!cv::imwrite((tmp / "map" / name).string(), map)) throw Error(Str(s.output_dir, ": cannot write map image"));
-      }
-      write += Seconds(t3, Clock::now());
-      for (Detection& d : out.detections) detections.push_back(std::move(d));
-    };
-    // Decoding: frame f + 1's two images are read alongside frame f's stereo, each by its own
-    // task (seconds summed over both).
-    const auto read = [&](FrameSource& source, cv::Mat* image, int f) {
-      const auto t0 = Clock::now();
-      if (!source.Read(image)) throw Error(Str(drive_dir, ": frame ", f, " could not be read (the stream ended early)"));
-      const double seconds = Seconds(t0, Clock::now());
-      std::lock_guard<std::mutex> lock(decode_mutex);
-      decode += seconds;
-    };
-    FrameOutput pending;  // the previous frame's, not yet finished
-    cv::Mat l, r, next_l, next_r;
-    if (frames > 0) {
-      read(*left, &l, 0);
-      read(*right, &r, 0);
-    }
-    for (int f = 0; f < frames; ++f) {
-      if (l.size() != r.size()) {
-        throw Error(Str(drive_dir, ": frame ", f, ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
-      }
-      if (l.cols != rig.Camera("left").model.width() || l.rows != rig.Camera("left").model.height()) {
-        throw Error(Str(drive_dir, ": frame ", f, " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
-                        rig.Camera("left").model.width(), "x", rig.Camera("left").model.height()));
-      }
-      FrameInput in;
-      in.frame = f;
-      in.t_s = times[f];
-      in.left = l;
-      in.right = r;
-      if (f > 0) {
-        std::string why;
-        in.motion_known = MotionBetween(can, times[f - 1], times[f], &in.current_in_previous, &why);
-        if (!in.motion_known) {
-          ++s.frames_without_motion;
-          s.warnings.push_back(Str("frame ", f, ": no known motion (", why, "); side detection skipped"));
-        }
-      }
-      std::vector<std::function<void()>> alongside;
-      if (f > 0) alongside.push_back([&] { finish(pending, f - 1); });
-      if (f + 1 < frames) {
-        alongside.push_back([&] { read(*left, &next_l, f + 1); });
-        alongside.push_back([&] { read(*right, &next_r, f + 1); });
-      }
-      FrameOutput out = pipeline.Process(in, alongside);
-      if (in.motion_known) ego = Compose(ego, in.current_in_previous);
-      s.front_vertical_offset_px = out.front.vertical_offset_px;
-      front += out.front_ms / 1000.0;
-      sides += out.sides_ms / 1000.0;
-      pending = std::move(out);
-      std::swap(l, next_l);
-      std::swap(r, next_r);
-      if (progress && f > 0) progress(f, frames);
-    }
-    if (frames > 0) finish(pending, frames - 1);
-    if (progress && frames > 0) progress(frames, frames);
-    auto t4 = Clock::now();
-    if (video.isOpened()) {
-      video.release();
-      RenameReplacing(video_tmp, (tmp / video_name).string());
-    }
-    if (diagnostics.isOpened()) {
-      diagnostics.release();
-      RenameReplacing(diagnostics_tmp, (tmp / "diagnostics.avi").string());
-    }
-    WriteDetections(detections, (tmp / "detections.csv").string());
-    WriteTracks(tracks, (tmp / "tracks.csv").string());
-    write += Seconds(t4, Clock::now());
-    s.frames = frames;
-    s.detections = static_cast<int>(detections.size());
-    s.stage_seconds = {{"decode", decode}, {"front", front}, {"sides", sides}, {"map", map_s}, {"write", write}};
+    DriveRun run(drive_dir, o, in, tmp, &s);
+    run.Run(progress);
+    run.WriteFiles();
     s.seconds = Seconds(start, Clock::now());
-    s.frames_per_second = s.seconds > 0 ? frames / s.seconds : 0;
+    s.frames_per_second = s.seconds > 0 ? in.frames / s.seconds : 0;
     WriteFileAtomically((tmp / "summary.json").string(), s.ToJson());  // last: marks completion
   } catch (...) {
     std::error_code ec;
