@@ -182,8 +182,7 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
   for (size_t i = 0; i < r->detections.size(); ++i) r->detections[i].id = static_cast<int>(i);
 }
 
-void FrontDetector::DetectWith(Reference& ref, FrontMatch* m) {
-  const VirtualView& view = *ref.view;
+cv::Mat FrontDetector::MatchReference(Reference& ref) {
   // The reference's columns that can show its objects, from ref.first on (the right view's
   // mirrored), against the whole other view.
   const SadStereoMatcher::PreparedView* reference = &left_prepared_;
@@ -202,31 +201,94 @@ void FrontDetector::DetectWith(Reference& ref, FrontMatch* m) {
   cv::Mat disparity = ref.matcher->Compute(*reference, *other, std::max(0, first - 16));
   disparity.colRange(0, first).setTo(kInvalidDisparity);
   if (ref.mirrored) cv::flip(disparity, disparity, 1);
-  m->disparity = disparity;
-  m->disparity.setTo(kInvalidDisparity, ref.ignore);
-  if (ref.temporal) m->disparity = ref.temporal->Apply(m->disparity);
+  disparity.setTo(kInvalidDisparity, ref.ignore);
+  if (ref.temporal) disparity = ref.temporal->Apply(disparity);
+  return disparity;
+}
+
+// Parts of one surface are linked when the gap between them on the ground is short, a wider gap
+// only within one vehicle's length, and when their tops are level (a pole beyond the end of a
+// car's side is twice as tall).
+bool FrontDetector::Linked(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels,
+                           const HistogramComponent& a, int x0, float d0, const HistogramComponent& b, int x1,
+                           float d1) const {
+  Eigen::Vector2d ga, gb;
+  if (!ColumnToGround(view, x0, d0, &ga) || !ColumnToGround(view, x1, d1, &gb) ||
+      (ga - gb).norm() > options_.link_max_gap_m) {
+    return false;
+  }
+  // Parts apart on the ground are one object only if together they fit one vehicle's length.
+  Eigen::Vector2d first_point, last_point;
+  if (options_.link_vehicle_length_m > 0 && (ga - gb).norm() > options_.link_free_gap_m &&
+      OuterPoint(view, a, false, &first_point) && OuterPoint(view, b, true, &last_point) &&
+      (first_point - last_point).norm() > options_.link_vehicle_length_m) {
+    return false;
+  }
+  return !(options_.link_max_top_difference_m > 0 &&
+           std::abs(TopHeight(view, m, labels, a) - TopHeight(view, m, labels, b)) > options_.link_max_top_difference_m);
+}
+
+// An obstacle stands up from the road: in each column it fills many rows with its disparity
+// (rows ~ height * d / B). Flat things (lane markings, road matched wrongly) and stray matches
+// fill few. Height per column = contributing rows * B / d; the component's is the median.
+bool FrontDetector::StandsUp(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels,
+                             const HistogramComponent& c) const {
+  std::vector<double> heights;
+  for (int x = c.x_begin; x < c.x_end; ++x) {
+    const float d = c.column_disparity[x - c.x_begin];
+    if (!std::isfinite(d) || d <= 0) continue;
+    int rows = 0;
+    for (int y = 0; y < m.disparity.rows; ++y) rows += InComponent(m, labels, c.label, x, y);
+    heights.push_back(rows * baseline_m_ / d);
+  }
+  if (heights.empty()) return false;
+  std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
+  return heights[heights.size() / 2] >= options_.min_obstacle_height_m ||
+         (c.x_end - c.x_begin >= options_.tall_min_columns && TopHeight(view, m, labels, c) >= options_.tall_min_top_m);
+}
+
+void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, std::pair<int, int> valid_columns,
+                         Reference& ref, FrontMatch* m) const {
+  // The outermost half window of columns is foreground fattening, not the object.
+  const auto [from, to] = ProjectedColumns(c, options_.stereo.block_width / 2);
+  std::vector<Eigen::Vector2d> points;
+  std::vector<std::pair<int, float>> columns;
+  // The farthest point towards the right camera, along the baseline from the left camera.
+  double reach = -std::numeric_limits<double>::infinity();
+  for (int x = from; x <= to; ++x) {
+    const float d = c.column_disparity[x - c.x_begin];
+    Eigen::Vector2d g;
+    if (!std::isfinite(d) || !ColumnToGround(view, x, d, &g) || g.norm() > options_.max_range_m) continue;
+    points.push_back(g);
+    columns.emplace_back(x, d);
+    reach = std::max(reach, (g - left_camera_).dot(across_));
+  }
+  // The right view keeps what lies wholly beyond the left camera, the left view the rest (and
+  // what it sees beyond, in case the right view finds nothing there).
+  if (points.empty()) return;
+  const bool beyond = reach < 0;
+  if (ref.mirrored && !beyond) return;
+  for (const auto& [x, d] : columns) {
+    const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);
+    if (row >= 0 && row < m->obstacle.rows) m->obstacle.at<float>(row, x) = d;
+  }
+  Detection det = DetectionFromPoints(points, "front");
+  const int margin = options_.stereo.block_width;
+  if (c.x_begin <= valid_columns.first + margin) det.clipped_ends.push_back(points.front());
+  if (c.x_end - 1 >= valid_columns.second - margin) det.clipped_ends.push_back(points.back());
+  std::vector<Detection>& into = beyond && !ref.mirrored ? ref.beyond : ref.found;
+  det.id = static_cast<int>(into.size());
+  into.push_back(std::move(det));
+}
+
+void FrontDetector::DetectWith(Reference& ref, FrontMatch* m) {
+  const VirtualView& view = *ref.view;
+  m->disparity = MatchReference(ref);
   m->score = ScoreImage(m->disparity, ref.road, options_.histogram, ref.ramp);
   cv::Mat moments, labels;
   m->histogram = ColumnHistogram(m->disparity, m->score, options_.histogram, &moments);
-  // Parts of one surface are linked when the gap between them on the ground is short, a wider
-  // gap only within one vehicle's length, and when their tops are level (a pole beyond the end of
-  // a car's side is twice as tall).
   const auto link = [&](const HistogramComponent& a, int x0, float d0, const HistogramComponent& b, int x1, float d1) {
-    Eigen::Vector2d ga, gb;
-    if (!ColumnToGround(view, x0, d0, &ga) || !ColumnToGround(view, x1, d1, &gb) ||
-        (ga - gb).norm() > options_.link_max_gap_m) {
-      return false;
-    }
-    // Parts apart on the ground are one object only if together they fit one vehicle's length.
-    Eigen::Vector2d first_point, last_point;
-    if (options_.link_vehicle_length_m > 0 && (ga - gb).norm() > options_.link_free_gap_m &&
-        OuterPoint(view, a, false, &first_point) && OuterPoint(view, b, true, &last_point) &&
-        (first_point - last_point).norm() > options_.link_vehicle_length_m) {
-      return false;
-    }
-    return !(options_.link_max_top_difference_m > 0 &&
-             std::abs(TopHeight(view, *m, labels, a) - TopHeight(view, *m, labels, b)) >
-                 options_.link_max_top_difference_m);
+    return Linked(view, *m, labels, a, x0, d0, b, x1, d1);
   };
   const std::vector<HistogramComponent> components =
       LinkComponents(FindComponents(m->histogram, options_.histogram, &labels, moments), m->disparity, ref.road,
@@ -234,56 +296,9 @@ void FrontDetector::DetectWith(Reference& ref, FrontMatch* m) {
   m->obstacle = cv::Mat(m->histogram.size(), CV_32F, cv::Scalar(0));
   ref.found.clear();
   ref.beyond.clear();
-  const auto [first_valid, last_valid] = ValidColumns(m->disparity);
-  const int margin = options_.stereo.block_width;
+  const std::pair<int, int> valid = ValidColumns(m->disparity);
   for (const HistogramComponent& c : components) {
-    // An obstacle stands up from the road: in each column it fills many rows with its disparity
-    // (rows ~ height * d / B). Flat things (lane markings, road matched wrongly) and stray matches
-    // fill few. Height per column = contributing rows * B / d; the component's is the median.
-    std::vector<double> heights;
-    for (int x = c.x_begin; x < c.x_end; ++x) {
-      const float d = c.column_disparity[x - c.x_begin];
-      if (!std::isfinite(d) || d <= 0) continue;
-      int rows = 0;
-      for (int y = 0; y < m->disparity.rows; ++y) rows += InComponent(*m, labels, c.label, x, y);
-      heights.push_back(rows * baseline_m_ / d);
-    }
-    if (heights.empty()) continue;
-    std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
-    if (heights[heights.size() / 2] < options_.min_obstacle_height_m &&
-        !(c.x_end - c.x_begin >= options_.tall_min_columns &&
-          TopHeight(view, *m, labels, c) >= options_.tall_min_top_m)) {
-      continue;
-    }
-    // The outermost half window of columns is foreground fattening, not the object.
-    const auto [from, to] = ProjectedColumns(c, options_.stereo.block_width / 2);
-    std::vector<Eigen::Vector2d> points;
-    std::vector<std::pair<int, float>> columns;
-    // The farthest point towards the right camera, along the baseline from the left camera.
-    double reach = -std::numeric_limits<double>::infinity();
-    for (int x = from; x <= to; ++x) {
-      const float d = c.column_disparity[x - c.x_begin];
-      Eigen::Vector2d g;
-      if (!std::isfinite(d) || !ColumnToGround(view, x, d, &g) || g.norm() > options_.max_range_m) continue;
-      points.push_back(g);
-      columns.emplace_back(x, d);
-      reach = std::max(reach, (g - left_camera_).dot(across_));
-    }
-    // The right view keeps what lies wholly beyond the left camera, the left view the rest (and
-    // what it sees beyond, in case the right view finds nothing there).
-    if (points.empty()) continue;
-    const bool beyond = reach < 0;
-    if (ref.mirrored && !beyond) continue;
-    for (const auto& [x, d] : columns) {
-      const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);
-      if (row >= 0 && row < m->obstacle.rows) m->obstacle.at<float>(row, x) = d;
-    }
-    Detection det = DetectionFromPoints(points, "front");
-    if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
-    if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
-    std::vector<Detection>& into = beyond && !ref.mirrored ? ref.beyond : ref.found;
-    det.id = static_cast<int>(into.size());
-    into.push_back(std::move(det));
+    if (StandsUp(view, *m, labels, c)) Keep(view, c, valid, ref, m);
   }
 }
 

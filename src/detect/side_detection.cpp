@@ -84,6 +84,83 @@ std::vector<Contact> ContinuousContacts(const std::vector<Contact>& contacts, do
   return kept;
 }
 
+// What the contact search of one matched pair reads.
+struct ContactSearch {
+  const VirtualView& reference;
+  const cv::Mat& disparity;
+  const cv::Mat& score;
+  const cv::Mat& labels;  // FindComponents' labels of the column histogram
+  const cv::Mat& ignore;
+  const cv::Mat& road;    // the road's disparity
+  const SideDetectorOptions& options;
+};
+
+// A component's contacts with the road, one per column where it has one.
+std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramComponent& c) {
+  const SideDetectorOptions& o = s.options;
+  const HistogramOptions& ho = o.histogram;
+  const ViewSpec& spec = s.reference.spec();
+  std::vector<Contact> contacts;
+  for (int x = c.x_begin; x < c.x_end; ++x) {
+    // The component's pixels in this column; the bottom-most is the contact with the road.
+    int bottom = -1, rows = 0;
+    for (int y = 0; y < spec.height; ++y) {
+      const float v = s.disparity.at<float>(y, x);
+      if (!std::isfinite(v) || s.score.at<float>(y, x) <= 0) continue;
+      const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
+      if (bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label) {
+        bottom = y;
+        ++rows;
+      }
+    }
+    const float disparity = c.column_disparity[x - c.x_begin];
+    Eigen::Vector3d g;
+    if (bottom < 0 || !std::isfinite(disparity) || !PixelToGround(s.reference, x, bottom, &g)) continue;
+    const int lowest = ExtendToContact(s.disparity, s.ignore, x, bottom, disparity, o.contact_tolerance_px,
+                                       static_cast<int>(o.max_gap_below_m * spec.focal_px / ViewDepth(s.reference, g)));
+    if (lowest != bottom && !PixelToGround(s.reference, x, lowest, &g)) continue;
+    Contact k;
+    k.x = x;
+    k.y = lowest;
+    // Depth and disparity of the lowest matched pixel (for the motion); the contact with the
+    // road, placed on the map, contact_trim_rows higher (vertical fattening; half a window for
+    // an object keeping pace with us over road of a different disparity).
+    k.depth = ViewDepth(s.reference, g);
+    int trim = o.contact_trim_rows;
+    const float road_here = s.road.at<float>(lowest, x);
+    if (std::abs(disparity) < o.min_motion_disparity_px && std::isfinite(road_here) &&
+        std::abs(road_here - disparity) > o.pacing_road_contrast_px) {
+      trim = std::max(trim, o.stereo.block_height / 2);
+    }
+    const int contact = std::max(0, lowest - trim);
+    if (contact != lowest && !PixelToGround(s.reference, x, contact, &g)) continue;
+    k.ground = Eigen::Vector2d(g.x(), g.z());
+    k.disparity = disparity;
+    k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
+    contacts.push_back(k);
+  }
+  return contacts;
+}
+
+// The object's own displacement along the camera's, B - median(depth x disparity) / f, as a
+// ground speed with its sigma: the matching noise, or the columns' own scatter (robust sigma)
+// when that is larger (a component mixing the object with its background disagrees with itself).
+void MeasureMotion(const std::vector<Contact>& contacts, double baseline_m, double focal_px, double interval_s,
+                   double disparity_sigma_px, Detection* det) {
+  std::vector<double> products, depths;
+  for (const Contact& k : contacts) {
+    products.push_back(k.depth * k.disparity);
+    depths.push_back(k.depth);
+  }
+  const double product = Median(products);
+  std::vector<double> deviations;
+  for (const double p : products) deviations.push_back(std::abs(p - product));
+  det->has_motion = true;
+  det->motion_mps = (baseline_m - product / focal_px) / interval_s;
+  det->motion_sigma_mps =
+      std::max(disparity_sigma_px * Median(depths), 1.4826 * Median(deviations)) / focal_px / interval_s;
+}
+
 }  // namespace
 
 SideDetectorOptions::SideDetectorOptions() {
@@ -159,30 +236,28 @@ const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view
   return geometry_.emplace(key, std::move(g)).first->second;
 }
 
-SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
-                                const PlanarPose& current_in_previous, double interval_s, bool continuing) {
-  SideResult r;
+bool SideDetector::MatchPair(const cv::Mat& previous_omni, const cv::Mat& current_omni,
+                             const PlanarPose& current_in_previous, bool continuing, SideResult* r, Matched* m) {
   const bool had_last = last_valid_;
   last_valid_ = false;  // until this call has matched
   // The camera's displacement, in the previous frame's vehicle frame.
   const Pose rel = current_in_previous.ToPose3();
   const Eigen::Vector3d t = camera_.vehicle_from_camera.t;
   const Eigen::Vector3d delta = rel.Apply(t) - t;
-  r.baseline_m = std::hypot(delta.x(), delta.z());
-  if (r.baseline_m < options_.min_baseline_m) {
-    r.skipped = true;
-    r.reason = Str("camera moved ", r.baseline_m, " m (< ", options_.min_baseline_m, " m)");
-    return r;
+  r->baseline_m = std::hypot(delta.x(), delta.z());
+  if (r->baseline_m < options_.min_baseline_m) {
+    r->skipped = true;
+    r->reason = Str("camera moved ", r->baseline_m, " m (< ", options_.min_baseline_m, " m)");
+    return false;
   }
   // Both views parallel to the displacement: heading alpha in the previous frame, alpha - dh in
   // the current one. SideViewSpec's yaw turns towards the front on either side.
   const double alpha = std::atan2(delta.x(), delta.z());
   // The displacement's direction in the current vehicle frame (for the velocity measurement).
-  const Eigen::Vector2d direction =
-      WorldToBodyDirection(current_in_previous, Eigen::Vector2d(delta.x(), delta.z()).normalized());
+  m->direction = WorldToBodyDirection(current_in_previous, Eigen::Vector2d(delta.x(), delta.z()).normalized());
   const double sign = side_ == Side::kLeft ? 1.0 : -1.0;
-  const int sixteenths = ScaleSixteenths(r.baseline_m);
-  r.view_scale = sixteenths / 16.0;
+  const int sixteenths = ScaleSixteenths(r->baseline_m);
+  r->view_scale = sixteenths / 16.0;
   SideViewCache& views = Views(sixteenths);
   const VirtualView& previous_view = views.Get(sign * alpha);
   const std::pair<int, long> previous_key{sixteenths, views.Key(sign * alpha)};
@@ -198,12 +273,11 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   // current image, so current(x) matches previous(x - d) with d = f B / depth > 0, the matcher's
   // convention. A left view moves along +x: mirrored left to right, the images follow the same
   // convention, and the disparity is mirrored back.
-  const VirtualView& reference = current_view;
-  r.reference_view = current;
-  r.other_view = previous;
-  const ViewSpec& spec = reference.spec();
-  const ViewGeometry& geometry = Geometry(reference, current_key);
-  const cv::Mat& ignore = geometry.ignore;
+  m->reference = &current_view;
+  r->reference_view = current;
+  r->other_view = previous;
+  const ViewSpec& spec = current_view.spec();
+  m->geometry = &Geometry(current_view, current_key);
   // Both views prefiltered as matched (mirrored for the left side); the current one is kept for
   // the next call.
   const auto prepare = [&](const cv::Mat& view, SadStereoMatcher::PreparedView* prepared) {
@@ -217,16 +291,25 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   };
   if (!reuse) prepare(previous, &last_prepared_);
   prepare(current, &prepared_);
-  r.disparity = matcher_->Compute(prepared_, last_prepared_);
-  if (side_ == Side::kLeft) cv::flip(r.disparity, r.disparity, 1);
+  r->disparity = matcher_->Compute(prepared_, last_prepared_);
+  if (side_ == Side::kLeft) cv::flip(r->disparity, r->disparity, 1);
   const auto [matched_first, matched_last] = SideMatchedColumns(side_, spec.width, options_.stereo);
-  r.sector = ViewColumnsSector(camera_.name, {t.x(), t.z()}, spec, matched_first, matched_last);
+  r->sector = ViewColumnsSector(camera_.name, {t.x(), t.z()}, spec, matched_first, matched_last);
   std::swap(last_prepared_, prepared_);
   last_view_ = current;
   last_key_ = current_key;
   last_valid_ = true;
-  r.disparity.setTo(kInvalidDisparity, ignore);
-  const cv::Mat road = RoadDisparity(geometry.inverse_depth, spec.focal_px, r.baseline_m);
+  r->disparity.setTo(kInvalidDisparity, m->geometry->ignore);
+  return true;
+}
+
+SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& current_omni,
+                                const PlanarPose& current_in_previous, double interval_s, bool continuing) {
+  SideResult r;
+  Matched m;
+  if (!MatchPair(previous_omni, current_omni, current_in_previous, continuing, &r, &m)) return r;
+  const ViewSpec& spec = m.reference->spec();
+  const cv::Mat road = RoadDisparity(m.geometry->inverse_depth, spec.focal_px, r.baseline_m);
   const HistogramOptions& ho = options_.histogram;
   r.score = ScoreImage(r.disparity, road, ho, RoadRamp(road, options_.stereo.block_height / 2 + 1));
   cv::Mat moments, labels;
@@ -235,47 +318,10 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   r.obstacle = cv::Mat(spec.height, spec.width, CV_8U, cv::Scalar(0));
   const auto [first_valid, last_valid] = ValidColumns(r.disparity);
   const int margin = options_.stereo.block_width;
+  const ContactSearch search{*m.reference, r.disparity, r.score, labels, m.geometry->ignore, road, options_};
   int id = 0;
   for (const HistogramComponent& c : components) {
-    std::vector<Contact> contacts;
-    for (int x = c.x_begin; x < c.x_end; ++x) {
-      // The component's pixels in this column; the bottom-most is the contact with the road.
-      int bottom = -1, rows = 0;
-      for (int y = 0; y < spec.height; ++y) {
-        const float v = r.disparity.at<float>(y, x);
-        if (!std::isfinite(v) || r.score.at<float>(y, x) <= 0) continue;
-        const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
-        if (bin >= 0 && bin < labels.rows && labels.at<int>(bin, x) == c.label) {
-          bottom = y;
-          ++rows;
-        }
-      }
-      const float disparity = c.column_disparity[x - c.x_begin];
-      Eigen::Vector3d g;
-      if (bottom < 0 || !std::isfinite(disparity) || !PixelToGround(reference, x, bottom, &g)) continue;
-      const int lowest = ExtendToContact(r.disparity, ignore, x, bottom, disparity, options_.contact_tolerance_px,
-                                         static_cast<int>(options_.max_gap_below_m * spec.focal_px / ViewDepth(reference, g)));
-      if (lowest != bottom && !PixelToGround(reference, x, lowest, &g)) continue;
-      Contact k;
-      k.x = x;
-      k.y = lowest;
-      // Depth and disparity of the lowest matched pixel (for the motion); the contact with the
-      // road, placed on the map, contact_trim_rows higher (vertical fattening; half a window for
-      // an object keeping pace with us over road of a different disparity).
-      k.depth = ViewDepth(reference, g);
-      int trim = options_.contact_trim_rows;
-      const float road_here = road.at<float>(lowest, x);
-      if (std::abs(disparity) < options_.min_motion_disparity_px && std::isfinite(road_here) &&
-          std::abs(road_here - disparity) > options_.pacing_road_contrast_px) {
-        trim = std::max(trim, options_.stereo.block_height / 2);
-      }
-      const int contact = std::max(0, lowest - trim);
-      if (contact != lowest && !PixelToGround(reference, x, contact, &g)) continue;
-      k.ground = Eigen::Vector2d(g.x(), g.z());
-      k.disparity = disparity;
-      k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
-      contacts.push_back(k);
-    }
+    std::vector<Contact> contacts = ComponentContacts(search, c);
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
     contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
     std::vector<Eigen::Vector2d> points;
@@ -292,22 +338,8 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
     det.id = id++;
     if (interval_s > 0 && contacts.size() >= 3) {
-      // The object's own displacement along the camera's: B - median(depth x disparity) / f.
-      std::vector<double> products, depths;
-      for (const Contact& k : contacts) {
-        products.push_back(k.depth * k.disparity);
-        depths.push_back(k.depth);
-      }
-      const double product = Median(products);
-      std::vector<double> deviations;
-      for (const double p : products) deviations.push_back(std::abs(p - product));
-      det.has_motion = true;
-      det.motion_direction = direction;
-      det.motion_mps = (r.baseline_m - product / spec.focal_px) / interval_s;
-      // The matching noise, or the columns' own scatter (robust sigma) when that is larger: a
-      // component mixing the object with its background disagrees with itself.
-      det.motion_sigma_mps = std::max(options_.disparity_sigma_px * Median(depths), 1.4826 * Median(deviations)) /
-                             spec.focal_px / interval_s;
+      MeasureMotion(contacts, r.baseline_m, spec.focal_px, interval_s, options_.disparity_sigma_px, &det);
+      det.motion_direction = m.direction;
     }
     r.detections.push_back(std::move(det));
   }

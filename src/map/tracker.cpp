@@ -256,13 +256,8 @@ Tracker::State Tracker::Predict(const State& x, double dt, Cov* F) {
   return out;
 }
 
-std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose& ego,
-                                        const std::vector<Detection>& detections) {
-  const double dt = started_ ? std::max(0.0, t_s - last_t_) : 0.0;
-  started_ = true;
-  last_t_ = t_s;
-  const Eigen::Matrix2d Rwv = BodyToWorldRotation(ego);
-  // Predict (constant turn, white acceleration noise, smaller across the track's axis).
+// Predict (constant turn, white acceleration noise, smaller across the track's axis).
+void Tracker::PredictTracks(double dt, const Eigen::Matrix2d& Rwv) {
   const double switch_probability = 1.0 - std::exp(-options_.model_switch_per_s * dt);
   for (Track& t : tracks_) {
     Cov F;
@@ -276,21 +271,25 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     t.standing_P += Eigen::Matrix2d::Identity() * options_.standing_drift_sigma * options_.standing_drift_sigma * dt;
     ++t.age;
   }
-  // Measurements in the world. A track follows one point of its object: the measurement for a
-  // track is the detection's ground point nearest to the track's prediction (a new track starts
-  // at the detection's nearest point to the vehicle). The nearest point to the vehicle alone
-  // would slide along the object as other parts come into view (passing a parked car it moves
-  // with us). The followed point leaving the view is handled by the cut ends (below); what is
-  // left of the sliding is covered by an uncertainty of a fraction of the detection's extent.
-  std::vector<Eigen::Vector2d> z;
-  std::vector<std::vector<Eigen::Vector2d>> points(detections.size()), clipped_ends(detections.size());
-  std::vector<Eigen::Matrix2d> R;
+}
+
+// Measurements in the world. A track follows one point of its object: the measurement for a
+// track is the detection's ground point nearest to the track's prediction (a new track starts at
+// the detection's nearest point to the vehicle). The nearest point to the vehicle alone would
+// slide along the object as other parts come into view (passing a parked car it moves with us).
+// The followed point leaving the view is handled by the cut ends (FollowedPoint); what is left of
+// the sliding is covered by an uncertainty of a fraction of the detection's extent.
+Tracker::Measurements Tracker::InWorld(const std::vector<Detection>& detections, const PlanarPose& ego,
+                                       const Eigen::Matrix2d& Rwv) const {
+  Measurements m;
+  m.points.resize(detections.size());
+  m.clipped_ends.resize(detections.size());
   for (size_t j = 0; j < detections.size(); ++j) {
     const Detection& d = detections[j];
-    z.push_back(BodyToWorld(ego, {d.x_m, d.z_m}));
-    for (const Eigen::Vector2d& p : d.points) points[j].push_back(BodyToWorld(ego, p));
-    for (const Eigen::Vector2d& p : d.clipped_ends) clipped_ends[j].push_back(BodyToWorld(ego, p));
-    if (points[j].empty()) points[j].push_back(z.back());
+    m.z.push_back(BodyToWorld(ego, {d.x_m, d.z_m}));
+    for (const Eigen::Vector2d& p : d.points) m.points[j].push_back(BodyToWorld(ego, p));
+    for (const Eigen::Vector2d& p : d.clipped_ends) m.clipped_ends[j].push_back(BodyToWorld(ego, p));
+    if (m.points[j].empty()) m.points[j].push_back(m.z.back());
     const double s = options_.meas_sigma_m + options_.meas_sigma_per_m * d.range_m;
     Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * s * s;
     if (options_.extent_sigma_fraction > 0 && std::isfinite(d.x_max_m - d.x_min_m) && std::isfinite(d.z_max_m - d.z_min_m)) {
@@ -299,84 +298,94 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
       r(0, 0) += ex * ex;
       r(1, 1) += ez * ez;
     }
-    R.push_back(Rwv * r * Rwv.transpose());
+    m.R.push_back(Rwv * r * Rwv.transpose());
   }
-  // Gated Mahalanobis costs and the optimal assignment.
+  return m;
+}
+
+// The followed point: the detection's point nearest to the prediction, averaged with its
+// neighbours within local_radius_m (single points are noisy, and picking the one nearest to the
+// prediction alone would favour the prediction). When that point is an end where the view cut
+// the object (Detection::clipped_ends), the followed point may lie beyond it unseen: only the
+// offset across the track's axis is measured, and only up to max_hidden_m along it.
+Tracker::Measured Tracker::FollowedPoint(const Measurements& m, size_t j, const Eigen::Vector2d& p) const {
+  const std::vector<Eigen::Vector2d>& points = m.points[j];
+  Eigen::Vector2d best = points.front();
+  for (const Eigen::Vector2d& q : points) {
+    if ((q - p).squaredNorm() < (best - p).squaredNorm()) best = q;
+  }
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  int n = 0;
+  for (const Eigen::Vector2d& q : points) {
+    if ((q - best).norm() <= options_.local_radius_m) {
+      sum += q;
+      ++n;
+    }
+  }
+  Measured out{sum / n, false};
+  for (const Eigen::Vector2d& e : m.clipped_ends[j]) out.clipped = out.clipped || (e - best).norm() <= options_.clip_radius_m;
+  return out;
+}
+
+// Gated Mahalanobis costs and the optimal assignment.
+Tracker::Association Tracker::Associate(const Measurements& m, const Eigen::Matrix2d& Rwv) const {
   const double forbidden = 1e12;
-  std::vector<std::vector<double>> cost(tracks_.size(), std::vector<double>(z.size(), forbidden));
-  // The followed point: the detection's point nearest to the prediction, averaged with its
-  // neighbours within local_radius_m (single points are noisy, and picking the one nearest to the
-  // prediction alone would favour the prediction). When that point is an end where the view cut
-  // the object (Detection::clipped_ends), the followed point may lie beyond it unseen: only the
-  // offset across the track's axis is measured, and only up to max_hidden_m along it.
-  struct Measured {
-    Eigen::Vector2d point;
-    bool clipped = false;
-  };
-  const auto nearest_to = [&](size_t j, const Eigen::Vector2d& p) {
-    Eigen::Vector2d best = points[j].front();
-    for (const Eigen::Vector2d& q : points[j]) {
-      if ((q - p).squaredNorm() < (best - p).squaredNorm()) best = q;
-    }
-    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
-    int n = 0;
-    for (const Eigen::Vector2d& q : points[j]) {
-      if ((q - best).norm() <= options_.local_radius_m) {
-        sum += q;
-        ++n;
-      }
-    }
-    Measured m{sum / n, false};
-    for (const Eigen::Vector2d& e : clipped_ends[j]) m.clipped = m.clipped || (e - best).norm() <= options_.clip_radius_m;
-    return m;
-  };
-  // measured[i][j]: detection j's followed point for track i (for the cost and the update);
-  // across[i]: the unit vector across track i's axis (what a cut end measures).
-  std::vector<std::vector<Measured>> measured(tracks_.size(), std::vector<Measured>(z.size()));
-  std::vector<Eigen::Vector2d> across(tracks_.size());
+  const size_t n = m.z.size();
+  std::vector<std::vector<double>> cost(tracks_.size(), std::vector<double>(n, forbidden));
+  Association a;
+  a.measured.assign(tracks_.size(), std::vector<Measured>(n));
+  a.across.resize(tracks_.size());
   for (size_t i = 0; i < tracks_.size(); ++i) {
-    const Eigen::Vector2d a = Axis(tracks_[i], Rwv);
-    across[i] = Eigen::Vector2d(-a.y(), a.x());
-    for (size_t j = 0; j < z.size(); ++j) {
-      measured[i][j] = nearest_to(j, tracks_[i].x.head<2>());
-      const Eigen::Vector2d innovation = measured[i][j].point - tracks_[i].x.head<2>();
-      const Eigen::Matrix2d S = tracks_[i].P.topLeftCorner<2, 2>() + R[j];
+    const Eigen::Vector2d axis = Axis(tracks_[i], Rwv);
+    a.across[i] = Eigen::Vector2d(-axis.y(), axis.x());
+    for (size_t j = 0; j < n; ++j) {
+      a.measured[i][j] = FollowedPoint(m, j, tracks_[i].x.head<2>());
+      const Eigen::Vector2d innovation = a.measured[i][j].point - tracks_[i].x.head<2>();
+      const Eigen::Matrix2d S = tracks_[i].P.topLeftCorner<2, 2>() + m.R[j];
       double d2;
-      if (measured[i][j].clipped) {
-        if (std::abs(innovation.dot(a)) > options_.max_hidden_m) continue;
-        const double e = innovation.dot(across[i]);
-        d2 = e * e / across[i].dot(S * across[i]);
+      if (a.measured[i][j].clipped) {
+        if (std::abs(innovation.dot(axis)) > options_.max_hidden_m) continue;
+        const double e = innovation.dot(a.across[i]);
+        d2 = e * e / a.across[i].dot(S * a.across[i]);
       } else {
         d2 = innovation.dot(S.ldlt().solve(innovation));
       }
       if (d2 <= options_.gate_chi2) cost[i][j] = d2;
     }
   }
-  const std::vector<int> assigned = HungarianAssignment(cost, forbidden);
-  std::vector<bool> used(z.size(), false);
+  a.assigned = HungarianAssignment(cost, forbidden);
+  return a;
+}
+
+// Updates the tracks with their detections (the others count a miss) and drops the lost ones;
+// returns which detections were used.
+std::vector<bool> Tracker::UpdateTracks(double t_s, const std::vector<Detection>& detections, const Measurements& ms,
+                                        const Association& a, const Eigen::Matrix2d& Rwv) {
+  std::vector<bool> used(ms.z.size(), false);
   for (size_t i = 0; i < tracks_.size(); ++i) {
     Track& t = tracks_[i];
-    const int j = i < assigned.size() ? assigned[i] : -1;
+    const int j = i < a.assigned.size() ? a.assigned[i] : -1;
     if (j < 0) {
       ++t.misses;
       continue;
     }
     used[j] = true;
-    const Measured& m = measured[i][j];
+    const Measured& m = a.measured[i][j];
+    const Eigen::Vector2d& across = a.across[i];
     if (m.clipped) {
       // Only the offset across the axis: H = [n^T 0], one scalar measurement.
       Eigen::Matrix<double, 1, 5> H;
-      H << across[i].x(), across[i].y(), 0, 0, 0;
-      ScalarUpdate(H, across[i].dot(m.point - t.x.head<2>()), across[i].dot(R[j] * across[i]),
+      H << across.x(), across.y(), 0, 0, 0;
+      ScalarUpdate(H, across.dot(m.point - t.x.head<2>()), across.dot(ms.R[j] * across),
                    std::numeric_limits<double>::infinity(), &t);
     } else {
       // Update (H = [I 0]); gated already by the assignment.
       Eigen::Matrix<double, 2, 5> H = Eigen::Matrix<double, 2, 5>::Zero();
       H.leftCols<2>().setIdentity();
-      Update<2>(H, m.point - t.x.head<2>(), R[j], std::numeric_limits<double>::infinity(), &t);
+      Update<2>(H, m.point - t.x.head<2>(), ms.R[j], std::numeric_limits<double>::infinity(), &t);
     }
     ApplyMotion(detections[j], Rwv, options_.motion_gate_chi2, &t);
-    ApplyRegistration(t_s, points[j], !clipped_ends[j].empty(), Rwv, &t);
+    ApplyRegistration(t_s, ms.points[j], !ms.clipped_ends[j].empty(), Rwv, &t);
     ++t.hits;
     t.misses = 0;
     if (t.hits >= options_.confirm_hits) t.confirmed = true;
@@ -384,25 +393,34 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
   tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
                                [&](const Track& t) { return t.misses > options_.max_misses || (!t.confirmed && t.misses > 0); }),
                 tracks_.end());
-  for (size_t j = 0; j < z.size(); ++j) {
+  return used;
+}
+
+// A new track for each detection no track took.
+void Tracker::StartTracks(double t_s, const std::vector<Detection>& detections, const Measurements& m,
+                          const std::vector<bool>& used, const Eigen::Matrix2d& Rwv) {
+  for (size_t j = 0; j < m.z.size(); ++j) {
     if (used[j]) continue;
     Track t;
     t.id = next_id_++;
-    t.x << z[j], 0, 0, 0;
+    t.x << m.z[j], 0, 0, 0;
     t.P = Cov::Zero();
-    t.P.topLeftCorner<2, 2>() = R[j];
-    t.standing = z[j];
-    t.standing_P = R[j];
+    t.P.topLeftCorner<2, 2>() = m.R[j];
+    t.standing = m.z[j];
+    t.standing_P = m.R[j];
     const Eigen::Vector2d sigma_v(options_.init_across_speed_sigma_mps, options_.init_speed_sigma_mps);
     t.P.block<2, 2>(2, 2) = Rwv * sigma_v.cwiseAbs2().asDiagonal() * Rwv.transpose();
     t.P(4, 4) = options_.init_turn_sigma_radps * options_.init_turn_sigma_radps;
     ApplyMotion(detections[j], Rwv, std::numeric_limits<double>::infinity(), &t);
-    ApplyRegistration(t_s, points[j], !clipped_ends[j].empty(), Rwv, &t);
+    ApplyRegistration(t_s, m.points[j], !m.clipped_ends[j].empty(), Rwv, &t);
     t.hits = 1;
     t.confirmed = options_.confirm_hits <= 1;
     tracks_.push_back(t);
   }
-  // Report in the current vehicle frame.
+}
+
+// The tracks in the current vehicle frame.
+std::vector<TrackState> Tracker::Report(int frame, double t_s, const PlanarPose& ego, const Eigen::Matrix2d& Rwv) const {
   std::vector<TrackState> out;
   const Eigen::Matrix2d Rv = Rwv.transpose();
   for (const Track& t : tracks_) {
@@ -433,6 +451,20 @@ std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose&
     out.push_back(s);
   }
   return out;
+}
+
+std::vector<TrackState> Tracker::Update(int frame, double t_s, const PlanarPose& ego,
+                                        const std::vector<Detection>& detections) {
+  const double dt = started_ ? std::max(0.0, t_s - last_t_) : 0.0;
+  started_ = true;
+  last_t_ = t_s;
+  const Eigen::Matrix2d Rwv = BodyToWorldRotation(ego);
+  PredictTracks(dt, Rwv);
+  const Measurements m = InWorld(detections, ego, Rwv);
+  const Association a = Associate(m, Rwv);
+  const std::vector<bool> used = UpdateTracks(t_s, detections, m, a, Rwv);
+  StartTracks(t_s, detections, m, used, Rwv);
+  return Report(frame, t_s, ego, Rwv);
 }
 
 }  // namespace dps

@@ -140,6 +140,18 @@ class SideDetector {
     cv::Mat ignore, inverse_depth;
   };
   const ViewGeometry& Geometry(const VirtualView& view, std::pair<int, long> key);
+  // The matched pair of one call: the reference (current) view, its geometry, and the camera's
+  // direction of travel in the current vehicle frame.
+  struct Matched {
+    const VirtualView* reference = nullptr;
+    const ViewGeometry* geometry = nullptr;
+    Eigen::Vector2d direction{0, 0};
+  };
+  // Renders both views parallel to the camera's displacement and matches them (the previous view
+  // is the last call's current one when `continuing`); fills r's baseline, views, disparity and
+  // sector. False (r skipped) when the camera moved less than min_baseline_m.
+  bool MatchPair(const cv::Mat& previous_omni, const cv::Mat& current_omni, const PlanarPose& current_in_previous,
+                 bool continuing, SideResult* r, Matched* m);
   // The view scale for a baseline, in sixteenths.
   int ScaleSixteenths(double baseline_m) const;
   SideViewCache& Views(int sixteenths);

@@ -131,6 +131,37 @@ class Tracker {
     // The last hits' times and ground points (world), for the registration velocity.
     std::vector<std::pair<double, std::vector<Eigen::Vector2d>>> shapes;
   };
+  // A frame's detections in the world: nearest points z, all ground points, the ends the view cut,
+  // and the measurement covariances.
+  struct Measurements {
+    std::vector<Eigen::Vector2d> z;
+    std::vector<std::vector<Eigen::Vector2d>> points, clipped_ends;
+    std::vector<Eigen::Matrix2d> R;
+  };
+  // Detection j's followed point for one track, and whether it is an end the view cut.
+  struct Measured {
+    Eigen::Vector2d point;
+    bool clipped = false;
+  };
+  // Tracks paired with detections: measured[i][j] for track i and detection j, across[i] the unit
+  // vector across track i's axis, assigned[i] track i's detection (-1: none).
+  struct Association {
+    std::vector<std::vector<Measured>> measured;
+    std::vector<Eigen::Vector2d> across;
+    std::vector<int> assigned;
+  };
+  // The steps of Update.
+  void PredictTracks(double dt, const Eigen::Matrix2d& world_from_vehicle);
+  Measurements InWorld(const std::vector<Detection>& detections, const PlanarPose& ego,
+                       const Eigen::Matrix2d& world_from_vehicle) const;
+  Measured FollowedPoint(const Measurements& m, size_t j, const Eigen::Vector2d& prediction) const;
+  Association Associate(const Measurements& m, const Eigen::Matrix2d& world_from_vehicle) const;
+  std::vector<bool> UpdateTracks(double t_s, const std::vector<Detection>& detections, const Measurements& m,
+                                 const Association& a, const Eigen::Matrix2d& world_from_vehicle);
+  void StartTracks(double t_s, const std::vector<Detection>& detections, const Measurements& m,
+                   const std::vector<bool>& used, const Eigen::Matrix2d& world_from_vehicle);
+  std::vector<TrackState> Report(int frame, double t_s, const PlanarPose& ego,
+                                 const Eigen::Matrix2d& world_from_vehicle) const;
   Eigen::Vector2d Axis(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const;
   Eigen::Matrix2d AccelCovariance(const Track& t, const Eigen::Matrix2d& world_from_vehicle) const;
   Cov ProcessNoise(const Eigen::Matrix2d& accel, double dt) const;
