@@ -20,6 +20,203 @@ constexpr double kPi = 3.14159265358979323846;
 // The map's colours for the grid (BGR): occupied cells grey, free ones light green.
 constexpr int kOccupiedGrey = 90, kFreeBlueRed = 215, kFreeGreen = 240;
 
+constexpr int kShift = 4;  // fillPoly's fractional bits
+
+// World (x, z) to grid cells (fractional: cell (c, r) spans [c, c + 1) x [r, r + 1)).
+struct GridFrame {
+  Eigen::Vector2d origin;
+  double cell_m;
+  Eigen::Vector2d Cell(const Eigen::Vector2d& w) const { return Eigen::Vector2d((w - origin) / cell_m); }
+  // A fan's vertex for fillPoly: cell centres at whole numbers, kShift fractional bits.
+  cv::Point Vertex(const Eigen::Vector2d& w) const {
+    const Eigen::Vector2d c = (Cell(w) - Eigen::Vector2d::Constant(0.5)) * (1 << kShift);
+    return cv::Point(static_cast<int>(std::lround(c.x())), static_cast<int>(std::lround(c.y())));
+  }
+};
+
+// A bearing that hit something: from the apex (world) along dir, at range with its sigma.
+struct Hit {
+  Eigen::Vector2d apex, dir;
+  double range, sigma;
+};
+
+// One frame's rays: per sector the free fan (apex and each bearing's free end) and the hits.
+struct FrameRays {
+  std::vector<Hit> hits;
+  std::vector<std::vector<cv::Point>> fans;
+};
+
+// Per sector and bearing step, the nearest detection point: free up to two sigmas before it (or
+// to free_range_m when none), occupied from there.
+FrameRays Rays(const PlanarPose& pose, const Coverage& coverage, const std::vector<Detection>& detections,
+               const GridFrame& frame, const OccupancyOptions& o) {
+  const Eigen::Matrix2d rotation = BodyToWorldRotation(pose);  // one transform per bearing
+  FrameRays rays;
+  const double step_rad = o.bearing_step_deg * kPi / 180;
+  for (const Sector& s : coverage.sectors) {
+    const int bins = std::max(1, static_cast<int>(std::ceil(2 * s.half_angle_rad / step_rad)));
+    std::vector<double> nearest(bins, std::numeric_limits<double>::infinity());
+    const auto see = [&](const Eigen::Vector2d& p) {
+      const Eigen::Vector2d rel = p - s.apex;
+      const double a = std::remainder(std::atan2(rel.x(), rel.y()) - s.direction_rad, 2 * kPi);
+      if (std::abs(a) > s.half_angle_rad) return;
+      const int b = std::clamp(static_cast<int>((a + s.half_angle_rad) / step_rad), 0, bins - 1);
+      nearest[b] = std::min(nearest[b], rel.norm());
+    };
+    for (const Detection& d : detections) {
+      if (d.points.empty()) see({d.x_m, d.z_m});
+      for (const Eigen::Vector2d& p : d.points) see(p);
+    }
+    const Eigen::Vector2d apex = BodyToWorld(pose, s.apex);
+    std::vector<cv::Point> fan{frame.Vertex(apex)};
+    for (int b = 0; b < bins; ++b) {
+      const double angle = s.direction_rad - s.half_angle_rad + (b + 0.5) * step_rad;
+      const Eigen::Vector2d dir = rotation * Eigen::Vector2d(std::sin(angle), std::cos(angle));
+      const double r = nearest[b];
+      const double sigma = std::isfinite(r) ? o.sigma0_m + o.sigma_per_m2 * r * r : 0.0;
+      const double free_end = std::isfinite(r) ? std::max(0.0, r - 2 * sigma) : o.free_range_m;
+      fan.push_back(frame.Vertex(apex + std::min(free_end, o.free_range_m) * dir));
+      if (std::isfinite(r)) rays.hits.push_back({apex, dir, r, sigma});
+    }
+    rays.fans.push_back(std::move(fan));
+  }
+  return rays;
+}
+
+// Only the cells this frame can touch (the fans' and the hits' bounding box, a cell of margin)
+// hold evidence: the rest of the grid only decays.
+cv::Rect TouchedCells(const FrameRays& rays, const GridFrame& frame, const OccupancyOptions& o, const cv::Rect& grid) {
+  double lo_x = std::numeric_limits<double>::infinity(), lo_z = lo_x, hi_x = -lo_x, hi_z = -lo_x;
+  const auto extend = [&](double cx, double cz) {
+    lo_x = std::min(lo_x, cx), hi_x = std::max(hi_x, cx), lo_z = std::min(lo_z, cz), hi_z = std::max(hi_z, cz);
+  };
+  for (const std::vector<cv::Point>& fan : rays.fans) {
+    for (const cv::Point& v : fan) extend(v.x / double(1 << kShift), v.y / double(1 << kShift));
+  }
+  for (const Hit& h : rays.hits) {
+    const Eigen::Vector2d c = frame.Cell(h.apex + (h.range + o.thickness_m + o.cell_m) * h.dir);
+    extend(c.x(), c.y());
+  }
+  if (!(lo_x <= hi_x)) return cv::Rect();
+  const int x0 = static_cast<int>(std::floor(std::max(-1.0, lo_x))) - 1;
+  const int z0 = static_cast<int>(std::floor(std::max(-1.0, lo_z))) - 1;
+  const int x1 = static_cast<int>(std::ceil(std::min(grid.width + 1.0, hi_x))) + 2;
+  const int z1 = static_cast<int>(std::ceil(std::min(grid.height + 1.0, hi_z))) + 2;
+  return cv::Rect(x0, z0, x1 - x0, z1 - z0) & grid;
+}
+
+// sum = min(clamp, max(-clamp, sum * decay + evidence)) over columns [from, to) of a row, with the
+// evidence (nullptr: none, +0), in vectors and a scalar tail of the same operations.
+void DecayAndAdd(float* sum, const float* evidence, int from, int to, float decay, float clamp) {
+  int col = from;
+#if CV_SIMD
+  const cv::v_float32 d = cv::vx_setall_f32(decay), hi = cv::vx_setall_f32(clamp), lo = cv::vx_setall_f32(-clamp);
+  for (; col + cv::v_float32::nlanes <= to; col += cv::v_float32::nlanes) {
+    const cv::v_float32 e = evidence ? cv::vx_load(evidence + col) : cv::vx_setzero_f32();
+    cv::v_store(sum + col, cv::v_min(cv::v_max(cv::vx_load(sum + col) * d + e, lo), hi));
+  }
+#endif
+  for (; col < to; ++col) {
+    sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + (evidence ? evidence[col] : 0.0f)));
+  }
+}
+
+// The evidence as 8 bits (128 = unknown, 1 / 255 = clamped free / occupied) at each block, sampled
+// at the nearest cell through the affine block -> cell map B as cv::warpAffine (INTER_NEAREST,
+// WARP_INVERSE_MAP) does: coordinates in 10-bit fixed point, rounded; outside the grid unknown.
+// (The same cells, at a fraction of its cost.)
+cv::Mat NearestCellLevels(const cv::Mat& sum, double clamp, const cv::Matx23d& B, cv::Size blocks) {
+  cv::Mat quantised;
+  sum.convertTo(quantised, CV_8U, 127.0 / clamp, 128.0);
+  constexpr int kBits = 10;
+  const auto fixed = [](double v) { return cv::saturate_cast<int>(v * (1 << kBits)); };
+  std::vector<int> column_step(blocks.width), row_step(blocks.width);
+  for (int b = 0; b < blocks.width; ++b) {
+    column_step[b] = fixed(B(0, 0) * b);
+    row_step[b] = fixed(B(1, 0) * b);
+  }
+  cv::Mat level(blocks, CV_8U);
+  for (int b = 0; b < blocks.height; ++b) {
+    const int column0 = fixed(B(0, 1) * b + B(0, 2)) + (1 << (kBits - 1));
+    const int row0 = fixed(B(1, 1) * b + B(1, 2)) + (1 << (kBits - 1));
+    std::uint8_t* out = level.ptr<std::uint8_t>(b);
+    for (int a = 0; a < blocks.width; ++a) {
+      const int column = (column0 + column_step[a]) >> kBits, row = (row0 + row_step[a]) >> kBits;
+      out[a] = static_cast<unsigned>(column) < static_cast<unsigned>(quantised.cols) &&
+                       static_cast<unsigned>(row) < static_cast<unsigned>(quantised.rows)
+                   ? quantised.at<std::uint8_t>(row, column)
+                   : 128;
+    }
+  }
+  return level;
+}
+
+// Each of `cols` levels repeated n times into out.
+void RepeatColumns(const std::uint8_t* e, int cols, int n, std::uint8_t* out) {
+  int b = 0;
+#if CV_SIMD
+  for (; n == 2 && b + cv::v_uint8::nlanes <= cols; b += cv::v_uint8::nlanes) {
+    cv::v_uint8 lo, hi;
+    const cv::v_uint8 x = cv::vx_load(e + b);
+    cv::v_zip(x, x, lo, hi);
+    cv::v_store(out + 2 * b, lo);
+    cv::v_store(out + 2 * b + cv::v_uint8::nlanes, hi);
+  }
+#endif
+  for (; b < cols; ++b) std::memset(out + b * n, e[b], n);
+}
+
+// One map row: pixel = background + (target - background) * |level - 128| / 128, the target grey
+// for occupied and light green for free (unknown cells, level 128, leave the background as it is).
+void BlendRow(const std::uint8_t* e, const std::uint8_t* bg, std::uint8_t* px, int cols) {
+  int u = 0;
+#if CV_SIMD
+  const cv::v_uint8 unknown = cv::vx_setall_u8(128);
+  const cv::v_int16 mid = cv::vx_setall_s16(128), grey = cv::vx_setall_s16(kOccupiedGrey);
+  const cv::v_int16 free_bg = cv::vx_setall_s16(kFreeBlueRed), free_g = cv::vx_setall_s16(kFreeGreen);
+  // One half of a register of pixels: the channel p (8 bits widened) towards its target.
+  const auto blend = [&](const cv::v_uint16& level16, const cv::v_uint16& p16, const cv::v_int16& free_target) {
+    const cv::v_int16 signed_level = cv::v_reinterpret_as_s16(level16) - mid;
+    const cv::v_int16 weight = cv::v_reinterpret_as_s16(cv::v_abs(signed_level));
+    const cv::v_int16 target = cv::v_select(signed_level > cv::vx_setzero_s16(), grey, free_target);
+    const cv::v_int16 p = cv::v_reinterpret_as_s16(p16);
+    return p + (cv::v_mul_wrap(target - p, weight) >> 7);
+  };
+  const auto channel = [&](const cv::v_uint16& e0, const cv::v_uint16& e1, const cv::v_uint8& c,
+                           const cv::v_int16& free_target) {
+    cv::v_uint16 c0, c1;
+    cv::v_expand(c, c0, c1);
+    return cv::v_pack_u(blend(e0, c0, free_target), blend(e1, c1, free_target));
+  };
+  for (; u + cv::v_uint8::nlanes <= cols; u += cv::v_uint8::nlanes) {
+    const cv::v_uint8 levels = cv::vx_load(e + u);
+    if (cv::v_check_all(levels == unknown)) {  // most of a map lies beyond the views
+      if (px != bg) {
+        const int lanes = cv::v_uint8::nlanes;
+        for (int i = 0; i < 3; ++i) cv::v_store(px + 3 * u + i * lanes, cv::vx_load(bg + 3 * u + i * lanes));
+      }
+      continue;
+    }
+    cv::v_uint8 b, g, r;
+    cv::v_load_deinterleave(bg + 3 * u, b, g, r);
+    cv::v_uint16 e0, e1;
+    cv::v_expand(levels, e0, e1);
+    cv::v_store_interleave(px + 3 * u, channel(e0, e1, b, free_bg), channel(e0, e1, g, free_g),
+                           channel(e0, e1, r, free_bg));
+  }
+#endif
+  for (; u < cols; ++u) {
+    const int a = std::abs(e[u] - 128);
+    const bool occupied = e[u] > 128;
+    const int targets[3] = {occupied ? kOccupiedGrey : kFreeBlueRed, occupied ? kOccupiedGrey : kFreeGreen,
+                            occupied ? kOccupiedGrey : kFreeBlueRed};
+    for (int k = 0; k < 3; ++k) {
+      const int c = bg[3 * u + k];
+      px[3 * u + k] = static_cast<std::uint8_t>(c + (((targets[k] - c) * a) >> 7));
+    }
+  }
+}
+
 }  // namespace
 
 void OccupancyOptions::Check() const {
@@ -70,69 +267,9 @@ double OccupancyGrid::AtVehicle(const Eigen::Vector2d& v) const { return At(Body
 void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, const std::vector<Detection>& detections) {
   pose_ = pose;
   Recentre({pose.x_m, pose.z_m});
-  const Eigen::Matrix2d rotation = BodyToWorldRotation(pose);  // one transform per bearing
-  const auto cell_of = [&](const Eigen::Vector2d& w) { return Eigen::Vector2d((w - origin_) / options_.cell_m); };
-  constexpr int kShift = 4;  // fillPoly's fractional bits
-  const auto vertex = [&](const Eigen::Vector2d& w) {
-    const Eigen::Vector2d c = (cell_of(w) - Eigen::Vector2d::Constant(0.5)) * (1 << kShift);  // cell centres
-    return cv::Point(static_cast<int>(std::lround(c.x())), static_cast<int>(std::lround(c.y())));
-  };
-  struct Hit {
-    Eigen::Vector2d apex, dir;
-    double range, sigma;
-  };
-  std::vector<Hit> hits;
-  std::vector<std::vector<cv::Point>> fans;
-  const double step_rad = options_.bearing_step_deg * kPi / 180;
-  for (const Sector& s : coverage.sectors) {
-    const int bins = std::max(1, static_cast<int>(std::ceil(2 * s.half_angle_rad / step_rad)));
-    std::vector<double> nearest(bins, std::numeric_limits<double>::infinity());
-    const auto see = [&](const Eigen::Vector2d& p) {
-      const Eigen::Vector2d rel = p - s.apex;
-      const double a = std::remainder(std::atan2(rel.x(), rel.y()) - s.direction_rad, 2 * kPi);
-      if (std::abs(a) > s.half_angle_rad) return;
-      const int b = std::clamp(static_cast<int>((a + s.half_angle_rad) / step_rad), 0, bins - 1);
-      nearest[b] = std::min(nearest[b], rel.norm());
-    };
-    for (const Detection& d : detections) {
-      if (d.points.empty()) see({d.x_m, d.z_m});
-      for (const Eigen::Vector2d& p : d.points) see(p);
-    }
-    const Eigen::Vector2d apex = BodyToWorld(pose, s.apex);
-    std::vector<cv::Point> fan{vertex(apex)};
-    for (int b = 0; b < bins; ++b) {
-      const double angle = s.direction_rad - s.half_angle_rad + (b + 0.5) * step_rad;
-      const Eigen::Vector2d dir = rotation * Eigen::Vector2d(std::sin(angle), std::cos(angle));
-      const double r = nearest[b];
-      const double sigma = std::isfinite(r) ? options_.sigma0_m + options_.sigma_per_m2 * r * r : 0.0;
-      const double free_end = std::isfinite(r) ? std::max(0.0, r - 2 * sigma) : options_.free_range_m;
-      fan.push_back(vertex(apex + std::min(free_end, options_.free_range_m) * dir));
-      if (std::isfinite(r)) hits.push_back({apex, dir, r, sigma});
-    }
-    fans.push_back(std::move(fan));
-  }
-  // Only the cells this frame can touch (the fans' and the hits' bounding box, a cell of margin)
-  // hold evidence: the rest of the grid only decays.
-  double lo_x = std::numeric_limits<double>::infinity(), lo_z = lo_x, hi_x = -lo_x, hi_z = -lo_x;
-  const auto extend = [&](double cx, double cz) {
-    lo_x = std::min(lo_x, cx), hi_x = std::max(hi_x, cx), lo_z = std::min(lo_z, cz), hi_z = std::max(hi_z, cz);
-  };
-  for (const std::vector<cv::Point>& fan : fans) {
-    for (const cv::Point& v : fan) extend(v.x / double(1 << kShift), v.y / double(1 << kShift));
-  }
-  for (const Hit& h : hits) {
-    const Eigen::Vector2d c = cell_of(h.apex + (h.range + options_.thickness_m + options_.cell_m) * h.dir);
-    extend(c.x(), c.y());
-  }
-  const cv::Rect grid(0, 0, sum_.cols, sum_.rows);
-  cv::Rect touched;
-  if (lo_x <= hi_x) {
-    const int x0 = static_cast<int>(std::floor(std::max(-1.0, lo_x))) - 1;
-    const int z0 = static_cast<int>(std::floor(std::max(-1.0, lo_z))) - 1;
-    const int x1 = static_cast<int>(std::ceil(std::min(sum_.cols + 1.0, hi_x))) + 2;
-    const int z1 = static_cast<int>(std::ceil(std::min(sum_.rows + 1.0, hi_z))) + 2;
-    touched = cv::Rect(x0, z0, x1 - x0, z1 - z0) & grid;
-  }
+  const GridFrame frame{origin_, options_.cell_m};
+  const FrameRays rays = Rays(pose, coverage, detections, frame, options_);
+  const cv::Rect touched = TouchedCells(rays, frame, options_, cv::Rect(0, 0, sum_.cols, sum_.rows));
   // This frame's evidence per cell: occupied wins over free; each cell counts once per frame.
   // The free part of every sector is one fan polygon (the apex and each bearing's free end),
   // filled at once with the free weight; then the occupied evidence is walked along the bearings
@@ -140,12 +277,13 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
   delta_.create(sum_.size(), CV_32F);
   cv::Mat evidence_roi = delta_(touched);
   evidence_roi.setTo(0);
-  for (const std::vector<cv::Point>& fan : fans) {
+  for (const std::vector<cv::Point>& fan : rays.fans) {
     cv::fillPoly(evidence_roi, std::vector<std::vector<cv::Point>>{fan}, cv::Scalar(options_.free_weight), cv::LINE_8,
                  kShift, -touched.tl() * (1 << kShift));
   }
+  const cv::Rect grid(0, 0, sum_.cols, sum_.rows);
   const auto occupy = [&](const Eigen::Vector2d& w, double weight) {
-    const Eigen::Vector2d c = cell_of(w);
+    const Eigen::Vector2d c = frame.Cell(w);
     const cv::Point cell(static_cast<int>(std::floor(c.x())), static_cast<int>(std::floor(c.y())));
     if (!grid.contains(cell)) return;
     CV_DbgAssert(touched.contains(cell));
@@ -153,7 +291,7 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
     d = std::max(d, static_cast<float>(weight));
   };
   const double walk = options_.cell_m / 2;
-  for (const Hit& h : hits) {
+  for (const Hit& h : rays.hits) {
     for (double t = std::max(walk, h.range - 2 * h.sigma); t <= h.range + options_.thickness_m; t += walk) {
       const double w = t < h.range ? options_.occupied_weight * std::exp(-0.5 * std::pow((t - h.range) / h.sigma, 2))
                                    : options_.occupied_weight;
@@ -162,28 +300,13 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
   }
   // Decay, this frame's evidence, clamp: one pass (no evidence outside the touched cells).
   const float decay = static_cast<float>(options_.decay), clamp = static_cast<float>(options_.clamp);
-  // sum = min(clamp, max(-clamp, sum * decay + evidence)) over columns [from, to) of a row, with
-  // the evidence (nullptr: none, +0), in vectors and a scalar tail of the same operations.
-  const auto pass = [&](float* sum, const float* evidence, int from, int to) {
-    int col = from;
-#if CV_SIMD
-    const cv::v_float32 d = cv::vx_setall_f32(decay), hi = cv::vx_setall_f32(clamp), lo = cv::vx_setall_f32(-clamp);
-    for (; col + cv::v_float32::nlanes <= to; col += cv::v_float32::nlanes) {
-      const cv::v_float32 e = evidence ? cv::vx_load(evidence + col) : cv::vx_setzero_f32();
-      cv::v_store(sum + col, cv::v_min(cv::v_max(cv::vx_load(sum + col) * d + e, lo), hi));
-    }
-#endif
-    for (; col < to; ++col) {
-      sum[col] = std::min(clamp, std::max(-clamp, sum[col] * decay + (evidence ? evidence[col] : 0.0f)));
-    }
-  };
   for (int row = 0; row < sum_.rows; ++row) {
     float* sum = sum_.ptr<float>(row);
     const bool in_rows = row >= touched.y && row < touched.y + touched.height;
     const int a = in_rows ? touched.x : sum_.cols, b = in_rows ? touched.x + touched.width : sum_.cols;
-    pass(sum, nullptr, 0, a);
-    pass(sum, delta_.ptr<float>(row), a, b);
-    pass(sum, nullptr, b, sum_.cols);
+    DecayAndAdd(sum, nullptr, 0, a, decay, clamp);
+    DecayAndAdd(sum, delta_.ptr<float>(row), a, b, decay, clamp);
+    DecayAndAdd(sum, nullptr, b, sum_.cols, decay, clamp);
   }
 }
 
@@ -222,34 +345,8 @@ void OccupancyGrid::Draw(const cv::Mat& background, cv::Mat& map, double map_ran
   const cv::Matx23d B(M(0, 0) * block, M(0, 1) * block, M(0, 2) + (M(0, 0) + M(0, 1)) * half,
                       M(1, 0) * block, M(1, 1) * block, M(1, 2) + (M(1, 0) + M(1, 1)) * half);
   const cv::Size blocks((map.cols + block - 1) / block, (map.rows + block - 1) / block);
-  // The evidence as 8 bits (128 = unknown, 1 / 255 = clamped free / occupied), sampled at the
-  // nearest cell as cv::warpAffine (INTER_NEAREST, WARP_INVERSE_MAP) does: coordinates in 10-bit
-  // fixed point, rounded; outside the grid unknown. (The same cells, at a fraction of its cost.)
-  cv::Mat quantised;
-  sum_.convertTo(quantised, CV_8U, 127.0 / options_.clamp, 128.0);
-  constexpr int kBits = 10;
-  const auto fixed = [](double v) { return cv::saturate_cast<int>(v * (1 << kBits)); };
-  std::vector<int> column_step(blocks.width), row_step(blocks.width);
-  for (int b = 0; b < blocks.width; ++b) {
-    column_step[b] = fixed(B(0, 0) * b);
-    row_step[b] = fixed(B(1, 0) * b);
-  }
-  cv::Mat level(blocks, CV_8U);
-  for (int b = 0; b < blocks.height; ++b) {
-    const int column0 = fixed(B(0, 1) * b + B(0, 2)) + (1 << (kBits - 1));
-    const int row0 = fixed(B(1, 1) * b + B(1, 2)) + (1 << (kBits - 1));
-    std::uint8_t* out = level.ptr<std::uint8_t>(b);
-    for (int a = 0; a < blocks.width; ++a) {
-      const int column = (column0 + column_step[a]) >> kBits, row = (row0 + row_step[a]) >> kBits;
-      out[a] = static_cast<unsigned>(column) < static_cast<unsigned>(quantised.cols) &&
-                       static_cast<unsigned>(row) < static_cast<unsigned>(quantised.rows)
-                   ? quantised.at<std::uint8_t>(row, column)
-                   : 128;
-    }
-  }
-  // Blend towards grey (occupied) or light green (free) by |evidence| / clamp, in 1/128 steps:
-  // pixel = background + (target - background) * |level - 128| / 128 (unknown cells, level 128,
-  // leave the background as it is).
+  const cv::Mat level = NearestCellLevels(sum_, options_.clamp, B, blocks);
+  // Blend towards grey (occupied) or light green (free) by |evidence| / clamp, in 1/128 steps.
   cv::parallel_for_(cv::Range(0, map.rows), [&](const cv::Range& rows) {
     const int n = block;
     std::vector<std::uint8_t> expanded(n > 1 ? level.cols * n : 0);
@@ -257,71 +354,13 @@ void OccupancyGrid::Draw(const cv::Mat& background, cv::Mat& map, double map_ran
     for (int v = rows.start; v < rows.end; ++v) {
       const std::uint8_t* e = level.ptr<std::uint8_t>(v / n);
       if (n > 1) {  // each block's level repeated over its n columns, once per n rows
-        std::uint8_t* out = expanded.data();
         if (expanded_row != v / n) {
           expanded_row = v / n;
-          int b = 0;
-#if CV_SIMD
-          for (; n == 2 && b + cv::v_uint8::nlanes <= level.cols; b += cv::v_uint8::nlanes) {
-            cv::v_uint8 lo, hi;
-            const cv::v_uint8 x = cv::vx_load(e + b);
-            cv::v_zip(x, x, lo, hi);
-            cv::v_store(out + 2 * b, lo);
-            cv::v_store(out + 2 * b + cv::v_uint8::nlanes, hi);
-          }
-#endif
-          for (; b < level.cols; ++b) std::memset(out + b * n, e[b], n);
+          RepeatColumns(e, level.cols, n, expanded.data());
         }
-        e = out;
+        e = expanded.data();
       }
-      const std::uint8_t* bg = background.ptr<std::uint8_t>(v);
-      std::uint8_t* px = map.ptr<std::uint8_t>(v);
-      int u = 0;
-#if CV_SIMD
-      const cv::v_uint8 unknown = cv::vx_setall_u8(128);
-      const cv::v_int16 mid = cv::vx_setall_s16(128), grey = cv::vx_setall_s16(kOccupiedGrey);
-      const cv::v_int16 free_bg = cv::vx_setall_s16(kFreeBlueRed), free_g = cv::vx_setall_s16(kFreeGreen);
-      // One half of a register of pixels: the channel p (8 bits widened) towards its target.
-      const auto blend = [&](const cv::v_uint16& level16, const cv::v_uint16& p16, const cv::v_int16& free_target) {
-        const cv::v_int16 signed_level = cv::v_reinterpret_as_s16(level16) - mid;
-        const cv::v_int16 weight = cv::v_reinterpret_as_s16(cv::v_abs(signed_level));
-        const cv::v_int16 target = cv::v_select(signed_level > cv::vx_setzero_s16(), grey, free_target);
-        const cv::v_int16 p = cv::v_reinterpret_as_s16(p16);
-        return p + (cv::v_mul_wrap(target - p, weight) >> 7);
-      };
-      const auto channel = [&](const cv::v_uint16& e0, const cv::v_uint16& e1, const cv::v_uint8& c,
-                               const cv::v_int16& free_target) {
-        cv::v_uint16 c0, c1;
-        cv::v_expand(c, c0, c1);
-        return cv::v_pack_u(blend(e0, c0, free_target), blend(e1, c1, free_target));
-      };
-      for (; u + cv::v_uint8::nlanes <= map.cols; u += cv::v_uint8::nlanes) {
-        const cv::v_uint8 levels = cv::vx_load(e + u);
-        if (cv::v_check_all(levels == unknown)) {  // most of a map lies beyond the views
-          if (px != bg) {
-            const int lanes = cv::v_uint8::nlanes;
-            for (int i = 0; i < 3; ++i) cv::v_store(px + 3 * u + i * lanes, cv::vx_load(bg + 3 * u + i * lanes));
-          }
-          continue;
-        }
-        cv::v_uint8 b, g, r;
-        cv::v_load_deinterleave(bg + 3 * u, b, g, r);
-        cv::v_uint16 e0, e1;
-        cv::v_expand(levels, e0, e1);
-        cv::v_store_interleave(px + 3 * u, channel(e0, e1, b, free_bg), channel(e0, e1, g, free_g),
-                               channel(e0, e1, r, free_bg));
-      }
-#endif
-      for (; u < map.cols; ++u) {
-        const int a = std::abs(e[u] - 128);
-        const bool occupied = e[u] > 128;
-        const int targets[3] = {occupied ? kOccupiedGrey : kFreeBlueRed, occupied ? kOccupiedGrey : kFreeGreen,
-                                occupied ? kOccupiedGrey : kFreeBlueRed};
-        for (int k = 0; k < 3; ++k) {
-          const int c = bg[3 * u + k];
-          px[3 * u + k] = static_cast<std::uint8_t>(c + (((targets[k] - c) * a) >> 7));
-        }
-      }
+      BlendRow(e, background.ptr<std::uint8_t>(v), map.ptr<std::uint8_t>(v), map.cols);
     }
   });
 }
