@@ -28,6 +28,120 @@ double PixelsPerRadian(const CameraModel& model, const Eigen::Vector3d& ray,
   return (b - a).norm() / kStep;
 }
 
+// The marked points of each line as rays, and each line's axis; throws dps::Error naming the
+// file's line for a point outside the image or without a ray, and a line marked with two axes.
+struct MarkedRays {
+  std::map<int, std::vector<Eigen::Vector3d>> rays;
+  std::map<int, char> axis_of;
+};
+
+MarkedRays LineRays(const std::string& camera, const CameraModel& model, const std::vector<Mark>& marks,
+                    const std::string& source) {
+  const std::string where = Str(source, ": camera '", camera, "'");
+  MarkedRays out;
+  for (const Mark& m : marks) {
+    const std::string at = m.file_line > 0 ? Str(source, ":", m.file_line) : where;
+    const Eigen::Vector2d px(m.u, m.v);
+    if (!model.InImage(px)) {
+      throw Error(Str(at, ": line ", m.line, ": point (", m.u, ", ", m.v, ") is outside the ",
+                      model.width(), "x", model.height(), " image of camera '", camera, "'"));
+    }
+    Eigen::Vector3d ray;
+    if (!model.Unproject(px, &ray)) {
+      throw Error(Str(at, ": line ", m.line, ": point (", m.u, ", ", m.v,
+                      ") has no ray (outside the rim / field of view of camera '", camera, "')"));
+    }
+    const auto it = out.axis_of.find(m.line);
+    if (it != out.axis_of.end() && it->second != m.axis) {
+      throw Error(Str(at, ": line ", m.line, " is marked with axis ", m.axis, " here and ",
+                      it->second, " before"));
+    }
+    out.axis_of[m.line] = m.axis;
+    out.rays[m.line].push_back(ray);
+  }
+  return out;
+}
+
+// Eq. 9 per line: the great circle through its rays, with its residual in degrees and pixels.
+std::vector<LineFit> FitLines(const MarkedRays& marked, const CameraModel& model, const std::string& where) {
+  std::vector<LineFit> lines;
+  for (const auto& [line, r] : marked.rays) {
+    if (r.size() < 3) {
+      throw Error(Str(where, ": line ", line, " has ", r.size(), " point(s); at least 3 are needed"));
+    }
+    LineFit fit;
+    fit.line = line;
+    fit.axis = marked.axis_of.at(line);
+    fit.points = static_cast<int>(r.size());
+    double rms = 0.0;
+    fit.normal = FitGreatCircle(r, &rms);
+    fit.rms_deg = rms * kRadToDeg;
+    double scale = 0.0;
+    for (const Eigen::Vector3d& p : r) scale += PixelsPerRadian(model, p, (fit.normal - fit.normal.dot(p) * p).normalized());
+    fit.rms_px = rms * scale / r.size();
+    lines.push_back(fit);
+  }
+  return lines;
+}
+
+// Outliers: residuals far above the camera's typical line.
+void MarkOutliers(const CalibrationOptions& options, std::vector<LineFit>* lines) {
+  std::vector<double> residuals;
+  for (const LineFit& f : *lines) residuals.push_back(f.rms_deg);
+  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
+  const double median = residuals[residuals.size() / 2];
+  for (LineFit& f : *lines) {
+    f.outlier = f.rms_deg > options.outlier_factor * median && f.rms_deg > options.outlier_min_deg;
+    f.used = !(f.outlier && options.drop_outliers);
+  }
+}
+
+// The rotation's rows measured: one per axis with at least two used lines.
+struct AxisRows {
+  Eigen::Vector3d row[3];
+  bool have[3] = {false, false, false};
+};
+
+// Eq. 10 per axis, signs from the nominal rig; throws when fewer than two axes are measured or an
+// axis's lines are degenerate.
+AxisRows FitAxes(const std::vector<LineFit>& lines, const Eigen::Matrix3d& nominal_R, const CalibrationOptions& options,
+                 const std::string& where, std::vector<AxisFit>* axes) {
+  int counts[3] = {0, 0, 0};
+  for (const LineFit& f : lines) counts[AxisIndex(f.axis)] += f.used;
+  AxisRows rows;
+  for (int k = 0; k < 3; ++k) {
+    if (counts[k] < 2) continue;
+    const char axis = "XYZ"[k];
+    std::vector<Eigen::Vector3d> normals;
+    for (const LineFit& f : lines) {
+      if (f.used && f.axis == axis) normals.push_back(f.normal);
+    }
+    Eigen::Vector3d sv;
+    Eigen::Vector3d m = VanishingDirection(normals, &sv);
+    if (sv(1) < options.degenerate_ratio * sv(0)) {
+      throw Error(Str(where, ": the ", normals.size(), " lines of axis ", axis,
+                      " are nearly the same great circle (degenerate; mark lines farther apart)"));
+    }
+    const Eigen::Vector3d nominal_row = nominal_R.row(k).transpose();
+    if (m.dot(nominal_row) < 0) m = -m;
+    AxisFit a;
+    a.axis = axis;
+    a.lines = static_cast<int>(normals.size());
+    a.direction = m;
+    double ss = 0.0;
+    for (const Eigen::Vector3d& l : normals) ss += std::pow(std::asin(std::min(1.0, std::abs(l.dot(m)))), 2);
+    a.spread_deg = std::sqrt(ss / normals.size()) * kRadToDeg;
+    axes->push_back(a);
+    rows.row[k] = m;
+    rows.have[k] = true;
+  }
+  if (rows.have[0] + rows.have[1] + rows.have[2] < 2) {
+    throw Error(Str(where, ": lines per axis X ", counts[0], ", Y ", counts[1], ", Z ", counts[2],
+                    ": at least 2 lines are needed on two axes (X and Z, or one of them and Y)"));
+  }
+  return rows;
+}
+
 }  // namespace
 
 Eigen::Vector3d FitGreatCircle(const std::vector<Eigen::Vector3d>& rays, double* rms_rad) {
@@ -79,101 +193,15 @@ CameraCalibration CalibrateCamera(const std::string& camera, const CameraModel& 
   const std::string where = Str(source, ": camera '", camera, "'");
   CameraCalibration out;
   out.camera = camera;
-
-  // Rays of each line.
-  std::map<int, std::vector<Eigen::Vector3d>> rays;
-  std::map<int, char> axis_of;
-  for (const Mark& m : marks) {
-    const std::string at = m.file_line > 0 ? Str(source, ":", m.file_line) : where;
-    const Eigen::Vector2d px(m.u, m.v);
-    if (!model.InImage(px)) {
-      throw Error(Str(at, ": line ", m.line, ": point (", m.u, ", ", m.v, ") is outside the ",
-                      model.width(), "x", model.height(), " image of camera '", camera, "'"));
-    }
-    Eigen::Vector3d ray;
-    if (!model.Unproject(px, &ray)) {
-      throw Error(Str(at, ": line ", m.line, ": point (", m.u, ", ", m.v,
-                      ") has no ray (outside the rim / field of view of camera '", camera, "')"));
-    }
-    const auto it = axis_of.find(m.line);
-    if (it != axis_of.end() && it->second != m.axis) {
-      throw Error(Str(at, ": line ", m.line, " is marked with axis ", m.axis, " here and ",
-                      it->second, " before"));
-    }
-    axis_of[m.line] = m.axis;
-    rays[m.line].push_back(ray);
-  }
-
-  // Eq. 9 per line.
-  for (const auto& [line, r] : rays) {
-    if (r.size() < 3) {
-      throw Error(Str(where, ": line ", line, " has ", r.size(), " point(s); at least 3 are needed"));
-    }
-    LineFit fit;
-    fit.line = line;
-    fit.axis = axis_of[line];
-    fit.points = static_cast<int>(r.size());
-    double rms = 0.0;
-    fit.normal = FitGreatCircle(r, &rms);
-    fit.rms_deg = rms * kRadToDeg;
-    double scale = 0.0;
-    for (const Eigen::Vector3d& p : r) scale += PixelsPerRadian(model, p, (fit.normal - fit.normal.dot(p) * p).normalized());
-    fit.rms_px = rms * scale / r.size();
-    out.lines.push_back(fit);
-  }
-
-  // Outliers: residuals far above the camera's typical line.
-  std::vector<double> residuals;
-  for (const LineFit& f : out.lines) residuals.push_back(f.rms_deg);
-  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
-  const double median = residuals[residuals.size() / 2];
-  for (LineFit& f : out.lines) {
-    f.outlier = f.rms_deg > options.outlier_factor * median && f.rms_deg > options.outlier_min_deg;
-    f.used = !(f.outlier && options.drop_outliers);
-  }
-
-  // Eq. 10 per axis, signs from the nominal rig.
-  int counts[3] = {0, 0, 0};
-  for (const LineFit& f : out.lines) counts[AxisIndex(f.axis)] += f.used;
-  Eigen::Vector3d rows[3];
-  bool have[3] = {false, false, false};
-  for (int k = 0; k < 3; ++k) {
-    if (counts[k] < 2) continue;
-    const char axis = "XYZ"[k];
-    std::vector<Eigen::Vector3d> normals;
-    for (const LineFit& f : out.lines) {
-      if (f.used && f.axis == axis) normals.push_back(f.normal);
-    }
-    Eigen::Vector3d sv;
-    Eigen::Vector3d m = VanishingDirection(normals, &sv);
-    if (sv(1) < options.degenerate_ratio * sv(0)) {
-      throw Error(Str(where, ": the ", normals.size(), " lines of axis ", axis,
-                      " are nearly the same great circle (degenerate; mark lines farther apart)"));
-    }
-    const Eigen::Vector3d nominal_row = nominal_R.row(k).transpose();
-    if (m.dot(nominal_row) < 0) m = -m;
-    AxisFit a;
-    a.axis = axis;
-    a.lines = static_cast<int>(normals.size());
-    a.direction = m;
-    double ss = 0.0;
-    for (const Eigen::Vector3d& l : normals) ss += std::pow(std::asin(std::min(1.0, std::abs(l.dot(m)))), 2);
-    a.spread_deg = std::sqrt(ss / normals.size()) * kRadToDeg;
-    out.axes.push_back(a);
-    rows[k] = m;
-    have[k] = true;
-  }
-  const int available = have[0] + have[1] + have[2];
-  if (available < 2) {
-    throw Error(Str(where, ": lines per axis X ", counts[0], ", Y ", counts[1], ", Z ", counts[2],
-                    ": at least 2 lines are needed on two axes (X and Z, or one of them and Y)"));
-  }
+  out.lines = FitLines(LineRays(camera, model, marks, source), model, where);
+  MarkOutliers(options, &out.lines);
+  const AxisRows rows = FitAxes(out.lines, nominal_R, options, where, &out.axes);
   // For the report: the missing row from the other two (right-handed: r1 x r2 = r3), and how far
   // the fitted rows are from orthogonal.
-  Eigen::Vector3d full[3] = {rows[0], rows[1], rows[2]};
-  if (!have[0]) full[0] = rows[1].cross(rows[2]).normalized();
-  if (!have[1]) full[1] = rows[2].cross(rows[0]).normalized();
-  if (!have[2]) full[2] = rows[0].cross(rows[1]).normalized();
+  Eigen::Vector3d full[3] = {rows.row[0], rows.row[1], rows.row[2]};
+  if (!rows.have[0]) full[0] = rows.row[1].cross(rows.row[2]).normalized();
+  if (!rows.have[1]) full[1] = rows.row[2].cross(rows.row[0]).normalized();
+  if (!rows.have[2]) full[2] = rows.row[0].cross(rows.row[1]).normalized();
   for (int k = 0; k < 3; ++k) out.R_before_fix.row(k) = full[k].transpose();
   for (int i = 0; i < 3; ++i) {
     for (int j = i + 1; j < 3; ++j) {

@@ -54,18 +54,8 @@ std::vector<int> MatchNearestFirst(const std::vector<const TruthRow*>& objects, 
   return object_match;
 }
 
-}  // namespace
-
-double BandScore::Recall() const { return objects ? double(matched_objects) / objects : 1.0; }
-double BandScore::Precision() const { return detections ? double(matched_detections) / detections : 1.0; }
-double BandScore::MedianRangeError() const { return Quantile(range_errors_m, 0.5); }
-double BandScore::RangeErrorP90() const { return Quantile(range_errors_m, 0.9); }
-double BandScore::MedianRelativeRangeError() const { return Quantile(relative_errors, 0.5); }
-double BandScore::MedianVelocityError() const { return Quantile(velocity_errors_mps, 0.5); }
-double SourceScore::Precision() const { return detections ? double(matched) / detections : 1.0; }
-
-EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
-                          const EvaluationOptions& options) {
+// The result before any frame: the overall score, the range bands and the three sources.
+EvaluationResult EmptyResult(const EvaluationOptions& options) {
   EvaluationResult result;
   result.overall.name = "all";
   result.overall.hi_m = options.max_range_m;
@@ -78,23 +68,114 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
     result.bands.push_back(s);
   }
   for (const char* name : {"front", "left", "right"}) result.sources.push_back({name, 0, 0});
-  auto band_of = [&](double range) -> BandScore* {
-    for (BandScore& b : result.bands) {
-      if (range >= b.lo_m && range < b.hi_m) return &b;
+  return result;
+}
+
+BandScore* BandOf(EvaluationResult* result, double range) {
+  for (BandScore& b : result->bands) {
+    if (range >= b.lo_m && range < b.hi_m) return &b;
+  }
+  return nullptr;
+}
+
+SourceScore* SourceOf(EvaluationResult* result, const std::string& name) {
+  for (SourceScore& s : result->sources) {
+    if (s.source == name) return &s;
+  }
+  result->sources.push_back({name, 0, 0});
+  return &result->sources.back();
+}
+
+// One frame's objects (counted: near point in the zone; uncounted: the others) and detections (in
+// the zone, outside it), and how they matched.
+struct FrameMatch {
+  std::vector<const TruthRow*> objects, uncounted;
+  std::vector<const Detection*> dets, outside;
+  std::vector<int> det_match;                 // detection j's counted object, -1: none
+  std::vector<int> det_seen;                  // >= 0: detection j saw an object, counted or not
+  std::vector<const Detection*> matched_by;   // counted object i's detection (in the zone or not)
+};
+
+void Match(FrameMatch* m) {
+  m->det_match.assign(m->dets.size(), -1);
+  const std::vector<int> object_match = MatchNearestFirst(m->objects, m->dets, &m->det_match);
+  // A counted object no detection in the zone matched may still be matched by one just outside
+  // it (a car whose near point is 19.5 m away, detected at 20.3 m): §5 matches detections and
+  // objects without regard to the zone, which only decides what is counted.
+  std::vector<const TruthRow*> unmatched;
+  std::vector<size_t> unmatched_index;
+  for (size_t i = 0; i < m->objects.size(); ++i) {
+    if (object_match[i] < 0) unmatched.push_back(m->objects[i]), unmatched_index.push_back(i);
+  }
+  std::vector<int> outside_match(m->outside.size(), -1);
+  const std::vector<int> late = MatchNearestFirst(unmatched, m->outside, &outside_match);
+  // Then the detections left over against the uncounted objects.
+  m->det_seen = m->det_match;
+  MatchNearestFirst(m->uncounted, m->dets, &m->det_seen);
+  m->matched_by.assign(m->objects.size(), nullptr);
+  for (size_t i = 0; i < m->objects.size(); ++i) {
+    if (object_match[i] >= 0) m->matched_by[i] = m->dets[object_match[i]];
+  }
+  for (size_t k = 0; k < unmatched.size(); ++k) {
+    if (late[k] >= 0) m->matched_by[unmatched_index[k]] = m->outside[late[k]];
+  }
+}
+
+// Recall and range errors of the counted objects, overall and by the band of their near point.
+void ScoreObjects(int f, const FrameMatch& m, EvaluationResult* result) {
+  for (size_t i = 0; i < m.objects.size(); ++i) {
+    const TruthRow& object = *m.objects[i];
+    const Eigen::Vector2d near = NearPoint(object);
+    const double range = near.norm();
+    if (!m.matched_by[i]) result->errors.push_back({f, true, object.id, object.kind, near, range});
+    for (BandScore* b : {&result->overall, BandOf(result, range)}) {
+      if (!b) continue;
+      ++b->objects;
+      if (!m.matched_by[i]) continue;
+      ++b->matched_objects;
+      const Detection& d = *m.matched_by[i];
+      const double error = std::abs(d.range_m - range);
+      b->range_errors_m.push_back(error);
+      b->relative_errors.push_back(error / std::max(range, 1e-6));
+      if (d.has_velocity) b->velocity_errors_mps.push_back(std::hypot(d.vx_mps - object.vx_mps, d.vz_mps - object.vz_mps));
     }
-    return nullptr;
-  };
-  auto source_of = [&](const std::string& name) -> SourceScore* {
-    for (SourceScore& s : result.sources) {
-      if (s.source == name) return &s;
+  }
+}
+
+// Precision of the detections in the zone, overall, by band (of their object's near point, or
+// their own range when false) and by source.
+void ScoreDetections(int f, const FrameMatch& m, EvaluationResult* result) {
+  for (size_t j = 0; j < m.dets.size(); ++j) {
+    const Detection& d = *m.dets[j];
+    const double range = m.det_match[j] >= 0 ? NearPoint(*m.objects[m.det_match[j]]).norm() : d.range_m;
+    for (BandScore* b : {&result->overall, BandOf(result, range)}) {
+      if (!b) continue;
+      ++b->detections;
+      b->matched_detections += m.det_seen[j] >= 0;
     }
-    result.sources.push_back({name, 0, 0});
-    return &result.sources.back();
-  };
-  auto in_zone = [&](const Eigen::Vector2d& p) {
+    if (m.det_seen[j] < 0) result->errors.push_back({f, false, -1, d.source, {d.x_m, d.z_m}, d.range_m});
+    SourceScore* s = SourceOf(result, d.source);
+    ++s->detections;
+    s->matched += m.det_seen[j] >= 0;
+  }
+}
+
+}  // namespace
+
+double BandScore::Recall() const { return objects ? double(matched_objects) / objects : 1.0; }
+double BandScore::Precision() const { return detections ? double(matched_detections) / detections : 1.0; }
+double BandScore::MedianRangeError() const { return Quantile(range_errors_m, 0.5); }
+double BandScore::RangeErrorP90() const { return Quantile(range_errors_m, 0.9); }
+double BandScore::MedianRelativeRangeError() const { return Quantile(relative_errors, 0.5); }
+double BandScore::MedianVelocityError() const { return Quantile(velocity_errors_mps, 0.5); }
+double SourceScore::Precision() const { return detections ? double(matched) / detections : 1.0; }
+
+EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
+                          const EvaluationOptions& options) {
+  EvaluationResult result = EmptyResult(options);
+  const auto in_zone = [&](const Eigen::Vector2d& p) {
     return p.norm() <= options.max_range_m && options.coverage.Contains(p);
   };
-
   std::map<int, std::vector<const TruthRow*>> truth_by_frame;
   for (const TruthRow& t : truth) truth_by_frame[t.frame].push_back(&t);
   std::map<int, std::vector<const Detection*>> det_by_frame;
@@ -105,71 +186,16 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
   std::sort(frames.begin(), frames.end());
   frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
   result.frames = static_cast<int>(frames.size());
-
   for (const int f : frames) {
     // Objects in the zone count (recall); the others, partly in view, can still be what a
     // detection in the zone sees, and such a detection is not a false one.
-    std::vector<const TruthRow*> objects, uncounted;
-    for (const TruthRow* t : truth_by_frame[f]) (in_zone(NearPoint(*t)) ? objects : uncounted).push_back(t);
-    std::vector<const Detection*> dets, outside;
-    for (const Detection* d : det_by_frame[f]) (in_zone({d->x_m, d->z_m}) ? dets : outside).push_back(d);
-    if (!dets.empty()) ++result.frames_with_detections;
-    std::vector<int> det_match(dets.size(), -1);
-    const std::vector<int> object_match = MatchNearestFirst(objects, dets, &det_match);
-    // A counted object no detection in the zone matched may still be matched by one just outside
-    // it (a car whose near point is 19.5 m away, detected at 20.3 m): §5 matches detections and
-    // objects without regard to the zone, which only decides what is counted.
-    std::vector<const TruthRow*> unmatched;
-    std::vector<size_t> unmatched_index;
-    for (size_t i = 0; i < objects.size(); ++i) {
-      if (object_match[i] < 0) unmatched.push_back(objects[i]), unmatched_index.push_back(i);
-    }
-    std::vector<int> outside_match(outside.size(), -1);
-    const std::vector<int> late = MatchNearestFirst(unmatched, outside, &outside_match);
-    // Then the detections left over against the uncounted objects: det_seen[j] >= 0 when
-    // detection j saw an object, counted or not.
-    std::vector<int> det_seen = det_match;
-    MatchNearestFirst(uncounted, dets, &det_seen);
-    std::vector<const Detection*> matched_by(objects.size(), nullptr);
-    for (size_t i = 0; i < objects.size(); ++i) {
-      if (object_match[i] >= 0) matched_by[i] = dets[object_match[i]];
-    }
-    for (size_t k = 0; k < unmatched.size(); ++k) {
-      if (late[k] >= 0) matched_by[unmatched_index[k]] = outside[late[k]];
-    }
-    for (size_t i = 0; i < objects.size(); ++i) {
-      const Eigen::Vector2d near = NearPoint(*objects[i]);
-      const double range = near.norm();
-      if (!matched_by[i]) result.errors.push_back({f, true, objects[i]->id, objects[i]->kind, near, range});
-      for (BandScore* b : {&result.overall, band_of(range)}) {
-        if (!b) continue;
-        ++b->objects;
-        if (matched_by[i]) {
-          ++b->matched_objects;
-          const Detection& d = *matched_by[i];
-          const double error = std::abs(d.range_m - range);
-          b->range_errors_m.push_back(error);
-          b->relative_errors.push_back(error / std::max(range, 1e-6));
-          if (d.has_velocity) {
-            b->velocity_errors_mps.push_back(std::hypot(d.vx_mps - objects[i]->vx_mps, d.vz_mps - objects[i]->vz_mps));
-          }
-        }
-      }
-    }
-    for (size_t j = 0; j < dets.size(); ++j) {
-      const double range = det_match[j] >= 0 ? NearPoint(*objects[det_match[j]]).norm() : dets[j]->range_m;
-      for (BandScore* b : {&result.overall, band_of(range)}) {
-        if (!b) continue;
-        ++b->detections;
-        b->matched_detections += det_seen[j] >= 0;
-      }
-      if (det_seen[j] < 0) {
-        result.errors.push_back({f, false, -1, dets[j]->source, {dets[j]->x_m, dets[j]->z_m}, dets[j]->range_m});
-      }
-      SourceScore* s = source_of(dets[j]->source);
-      ++s->detections;
-      s->matched += det_seen[j] >= 0;
-    }
+    FrameMatch m;
+    for (const TruthRow* t : truth_by_frame[f]) (in_zone(NearPoint(*t)) ? m.objects : m.uncounted).push_back(t);
+    for (const Detection* d : det_by_frame[f]) (in_zone({d->x_m, d->z_m}) ? m.dets : m.outside).push_back(d);
+    if (!m.dets.empty()) ++result.frames_with_detections;
+    Match(&m);
+    ScoreObjects(f, m, &result);
+    ScoreDetections(f, m, &result);
   }
   return result;
 }

@@ -17,6 +17,36 @@ namespace {
 
 constexpr double kMaxViewScale = 1.25;
 
+// Runs each task once on up to cv::getNumThreads() workers, each taking the next task until none
+// is left; returns each task's milliseconds, and rethrows the first failed task's exception (in
+// task order) once all have run. Each task's own cv::parallel_for_ then runs serially inside it
+// (OpenCV does not nest parallel regions): on 2 cores this costs less than splitting every stage
+// into stripes, whose synchronisation dominates at the paper's 320x240 (docs/performance.md).
+std::vector<double> RunTasks(const std::vector<std::function<void()>>& tasks) {
+  const int n = static_cast<int>(tasks.size());
+  std::vector<double> task_ms(n, 0.0);
+  std::vector<std::exception_ptr> failure(n);
+  std::atomic<int> next{0};
+  const int workers = std::max(1, std::min<int>(cv::getNumThreads(), n));
+  cv::parallel_for_(cv::Range(0, workers), [&](const cv::Range& range) {
+    for (int w = range.start; w < range.end; ++w) {
+      for (int i = next++; i < n; i = next++) {
+        const auto start = std::chrono::steady_clock::now();
+        try {
+          tasks[i]();
+        } catch (...) {
+          failure[i] = std::current_exception();
+        }
+        task_ms[i] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      }
+    }
+  }, workers);
+  for (const std::exception_ptr& f : failure) {
+    if (f) std::rethrow_exception(f);
+  }
+  return task_ms;
+}
+
 }  // namespace
 
 PipelineOptions DefaultPipelineOptions(const Rig& rig) {
@@ -110,57 +140,33 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
   front_->RenderViews(grey[0], grey[1], &out.front);
   const double front_views_ms = ms(front_start, now());
   // The sources share nothing but the input, so they run as concurrent tasks with the caller's
-  // `alongside` work: each of cv::getNumThreads() workers takes the next task until none is left,
-  // in the order front (its two references), alongside..., left, right (the front pair is the
-  // largest). Each stage's own cv::parallel_for_ then runs serially inside its task (OpenCV does
-  // not nest parallel regions): on 2 cores this costs less than splitting every stage into
-  // stripes, whose synchronisation dominates at the paper's 320x240 (docs/performance.md).
-  const int n_alongside = static_cast<int>(alongside.size());
-  // Task ids; alongside k is kAlongside + k.
-  const int kFront = 0, kFrontRight = 1, kLeft = 2, kRight = 3, kAlongside = 4;
-  std::vector<int> tasks{kFront, kFrontRight};
-  for (int k = 0; k < n_alongside; ++k) tasks.push_back(kAlongside + k);
-  if (sides) tasks.insert(tasks.end(), {kLeft, kRight});
+  // `alongside` work, in the order front (its two references), alongside..., left, right (the
+  // front pair is the largest).
   const double dt = in.t_s - previous_t_s_;
-  std::vector<double> task_ms(kAlongside + n_alongside, 0.0);
-  std::vector<std::exception_ptr> failure(kAlongside + n_alongside);
-  std::atomic<int> next{0};
-  const int workers = std::max(1, std::min<int>(cv::getNumThreads(), static_cast<int>(tasks.size())));
-  cv::parallel_for_(cv::Range(0, workers), [&](const cv::Range& range) {
-    for (int w = range.start; w < range.end; ++w) {
-      for (int i = next++; i < static_cast<int>(tasks.size()); i = next++) {
-        const int task = tasks[i];
-        const auto start = now();
-        try {
-          if (task == kFront) front_->MatchReference(FrontReference::kLeftView, &out.front);
-          if (task == kFrontRight) front_->MatchReference(FrontReference::kRightView, &out.front);
-          if (task == kLeft) {
-            out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, continuing);
-          }
-          if (task == kRight) {
-            out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, continuing);
-          }
-          if (task >= kAlongside) alongside[task - kAlongside]();
-        } catch (...) {
-          failure[task] = std::current_exception();
-        }
-        task_ms[task] = ms(start, now());
-      }
-    }
-  }, workers);
-  for (const std::exception_ptr& f : failure) {
-    if (f) std::rethrow_exception(f);
+  std::vector<std::function<void()>> tasks{
+      [&] { front_->MatchReference(FrontReference::kLeftView, &out.front); },
+      [&] { front_->MatchReference(FrontReference::kRightView, &out.front); }};
+  tasks.insert(tasks.end(), alongside.begin(), alongside.end());
+  if (sides) {
+    tasks.push_back([&] { out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, continuing); });
+    tasks.push_back([&] { out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, continuing); });
   }
+  const std::vector<double> task_ms = RunTasks(tasks);
   front_->CombineReferences(&out.front);
-  out.front_ms = front_views_ms + task_ms[kFront] + task_ms[kFrontRight];
-  out.sides_ms = task_ms[kLeft] + task_ms[kRight];
+  out.front_ms = front_views_ms + task_ms[0] + task_ms[1];
+  out.sides_ms = sides ? task_ms[tasks.size() - 2] + task_ms[tasks.size() - 1] : 0.0;
   out.detect_ms = ms(t0, now());
-  out.detections = out.front.detections;
-  out.coverage.sectors.push_back(coverage_.sectors.front());
-  for (const SideResult* s : {&out.left, &out.right}) {
+  Collect(in, sides, grey, &out);
+  return out;
+}
+
+void SurroundPipeline::Collect(const FrameInput& in, bool sides, const cv::Mat grey[2], FrameOutput* out) {
+  out->detections = out->front.detections;
+  out->coverage.sectors.push_back(coverage_.sectors.front());
+  for (const SideResult* s : {&out->left, &out->right}) {
     if (!sides || s->skipped) continue;
-    out.coverage.sectors.push_back(s->sector);
-    for (const Detection& d : s->detections) out.detections.push_back(d);
+    out->coverage.sectors.push_back(s->sector);
+    for (const Detection& d : s->detections) out->detections.push_back(d);
   }
   sides_last_ = sides;  // the side detectors saw this frame as their current one
   if (options_.sides) {
@@ -168,16 +174,15 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
     previous_right_ = grey[1];
     previous_t_s_ = in.t_s;
   }
-  for (Detection& d : out.detections) {
+  for (Detection& d : out->detections) {
     d.frame = in.frame;
     d.t_s = in.t_s;
   }
-  out.detections = FuseDetections(out.detections, options_.merge_distance_m);
+  out->detections = FuseDetections(out->detections, options_.merge_distance_m);
   if (options_.vehicle_length_m > 0) {
-    out.detections = MergeVehicleParts(std::move(out.detections), options_.vehicle_length_m,
-                                       options_.vehicle_width_m, options_.vehicle_across_sources_only, viewpoints_);
+    out->detections = MergeVehicleParts(std::move(out->detections), options_.vehicle_length_m,
+                                        options_.vehicle_width_m, options_.vehicle_across_sources_only, viewpoints_);
   }
-  return out;
 }
 
 }  // namespace dps

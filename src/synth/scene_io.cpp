@@ -97,6 +97,75 @@ PaintedLine ReadLine(const FieldReader& f) {
   return l;
 }
 
+// The scene's rig: a path to a rig.yaml (relative to the scene file) or the rig's fields inline.
+Rig ReadSceneRig(const FieldReader& f, const std::string& path) {
+  const cv::FileNode rig = f.Required("rig");
+  if (rig.isString()) {
+    const std::filesystem::path rel(static_cast<std::string>(rig));
+    const std::filesystem::path rig_path =
+        rel.is_absolute() ? rel : std::filesystem::path(path).parent_path() / rel;
+    try {
+      return ReadRig(rig_path.string());
+    } catch (const Error& e) {
+      f.Fail("rig", e.what());
+    }
+  } else if (rig.isMap()) {
+    return ParseRig(rig, path + ": rig");
+  }
+  f.Fail("rig", "expected a path to rig.yaml or a map with its fields");
+}
+
+// road: a map of lane settings, or 'none'.
+void ReadRoad(const FieldReader& f, RoadMarkings* road) {
+  const cv::FileNode node = f.Required("road");
+  if (node.isString() && static_cast<std::string>(node) == "none") {
+    road->enabled = false;
+  } else if (node.isMap()) {
+    const FieldReader r = f.Child(node, "road");
+    road->lane_width_m = Positive(r, "lane_width", road->lane_width_m);
+    road->lanes_left = r.IntegerOr("lanes_left", road->lanes_left);
+    road->lanes_right = r.IntegerOr("lanes_right", road->lanes_right);
+    if (road->lanes_left < 0) r.Fail("lanes_left", "expected >= 0");
+    if (road->lanes_right < 0) r.Fail("lanes_right", "expected >= 0");
+    road->ego_lane_center_x_m = r.NumberOr("ego_lane_center_x", 0.0);
+    road->marking_width_m = Positive(r, "marking_width", road->marking_width_m);
+    road->dash_length_m = Positive(r, "dash_length", road->dash_length_m);
+    road->dash_gap_m = NonNegative(r, "dash_gap", road->dash_gap_m);
+  } else {
+    f.Fail("road", "expected a map of lane settings or 'none'");
+  }
+}
+
+// objects (unique ids), painted lines and the calibration block.
+void ReadContents(const FieldReader& f, Scene* s) {
+  std::set<int> ids;
+  if (f.Has("objects")) {
+    const cv::FileNode list = f.Required("objects");
+    if (!list.isSeq()) f.Fail("objects", "expected a list");
+    int i = 0;
+    for (const cv::FileNode& item : list) {
+      SceneObject o = ReadObject(f.Child(item, Str("objects[", i++, "]")));
+      if (!ids.insert(o.id).second) f.Fail("objects", Str("duplicate id ", o.id));
+      s->objects.push_back(std::move(o));
+    }
+  }
+  if (f.Has("lines")) {
+    const cv::FileNode list = f.Required("lines");
+    if (!list.isSeq()) f.Fail("lines", "expected a list");
+    int i = 0;
+    for (const cv::FileNode& item : list) s->lines.push_back(ReadLine(f.Child(item, Str("lines[", i++, "]"))));
+  }
+  if (f.Has("calibration")) {
+    const FieldReader c = f.Child(f.Required("calibration"), "calibration");
+    CalibrationSettings& cal = s->calibration;
+    cal.mark_noise_px = NonNegative(c, "mark_noise_px", cal.mark_noise_px);
+    cal.mark_spacing_m = Positive(c, "mark_spacing", cal.mark_spacing_m);
+    cal.min_rotation_deg = NonNegative(c, "min_rotation_deg", cal.min_rotation_deg);
+    cal.max_rotation_deg = NonNegative(c, "max_rotation_deg", cal.max_rotation_deg);
+    if (cal.max_rotation_deg < cal.min_rotation_deg) c.Fail("max_rotation_deg", "expected >= min_rotation_deg");
+  }
+}
+
 }  // namespace
 
 Scene ReadScene(const std::string& path) {
@@ -112,22 +181,7 @@ Scene ReadScene(const std::string& path) {
   } else {
     f.Fail("kind", "expected drive or calibration, got '" + kind + "'");
   }
-
-  const cv::FileNode rig = f.Required("rig");
-  if (rig.isString()) {
-    const std::filesystem::path rel(static_cast<std::string>(rig));
-    const std::filesystem::path rig_path =
-        rel.is_absolute() ? rel : std::filesystem::path(path).parent_path() / rel;
-    try {
-      s.rig = ReadRig(rig_path.string());
-    } catch (const Error& e) {
-      f.Fail("rig", e.what());
-    }
-  } else if (rig.isMap()) {
-    s.rig = ParseRig(rig, path + ": rig");
-  } else {
-    f.Fail("rig", "expected a path to rig.yaml or a map with its fields");
-  }
+  s.rig = ReadSceneRig(f, path);
   if (f.Has("size")) {
     const Eigen::MatrixXd size = f.Matrix("size", 2, 1);
     if (size(0) < 16 || size(1) < 16) f.Fail("size", "expected [width, height], each >= 16");
@@ -138,7 +192,6 @@ Scene ReadScene(const std::string& path) {
   const double seed = f.NumberOr("seed", 1.0);
   if (seed < 0 || seed != std::floor(seed)) f.Fail("seed", "expected a non-negative integer");
   s.seed = static_cast<std::uint64_t>(seed);
-
   if (f.Has("render")) {
     const FieldReader r = f.Child(f.Required("render"), "render");
     s.render.supersample = r.IntegerOr("supersample", s.render.supersample);
@@ -147,56 +200,12 @@ Scene ReadScene(const std::string& path) {
     s.render.blur_sigma_px = NonNegative(r, "blur_sigma_px", s.render.blur_sigma_px);
   }
   s.ego = ReadMotion(f, "ego");
-
   if (f.Has("road")) {
-    const cv::FileNode road = f.Required("road");
-    if (road.isString() && static_cast<std::string>(road) == "none") {
-      s.road.enabled = false;
-    } else if (road.isMap()) {
-      const FieldReader r = f.Child(road, "road");
-      s.road.lane_width_m = Positive(r, "lane_width", s.road.lane_width_m);
-      s.road.lanes_left = r.IntegerOr("lanes_left", s.road.lanes_left);
-      s.road.lanes_right = r.IntegerOr("lanes_right", s.road.lanes_right);
-      if (s.road.lanes_left < 0) r.Fail("lanes_left", "expected >= 0");
-      if (s.road.lanes_right < 0) r.Fail("lanes_right", "expected >= 0");
-      s.road.ego_lane_center_x_m = r.NumberOr("ego_lane_center_x", 0.0);
-      s.road.marking_width_m = Positive(r, "marking_width", s.road.marking_width_m);
-      s.road.dash_length_m = Positive(r, "dash_length", s.road.dash_length_m);
-      s.road.dash_gap_m = NonNegative(r, "dash_gap", s.road.dash_gap_m);
-    } else {
-      f.Fail("road", "expected a map of lane settings or 'none'");
-    }
+    ReadRoad(f, &s.road);
   } else if (s.kind == SceneKind::kCalibration) {
     s.road.enabled = false;
   }
-
-  std::set<int> ids;
-  if (f.Has("objects")) {
-    const cv::FileNode list = f.Required("objects");
-    if (!list.isSeq()) f.Fail("objects", "expected a list");
-    int i = 0;
-    for (const cv::FileNode& item : list) {
-      SceneObject o = ReadObject(f.Child(item, Str("objects[", i++, "]")));
-      if (!ids.insert(o.id).second) f.Fail("objects", Str("duplicate id ", o.id));
-      s.objects.push_back(std::move(o));
-    }
-  }
-  if (f.Has("lines")) {
-    const cv::FileNode list = f.Required("lines");
-    if (!list.isSeq()) f.Fail("lines", "expected a list");
-    int i = 0;
-    for (const cv::FileNode& item : list) s.lines.push_back(ReadLine(f.Child(item, Str("lines[", i++, "]"))));
-  }
-  if (f.Has("calibration")) {
-    const FieldReader c = f.Child(f.Required("calibration"), "calibration");
-    s.calibration.mark_noise_px = NonNegative(c, "mark_noise_px", s.calibration.mark_noise_px);
-    s.calibration.mark_spacing_m = Positive(c, "mark_spacing", s.calibration.mark_spacing_m);
-    s.calibration.min_rotation_deg = NonNegative(c, "min_rotation_deg", s.calibration.min_rotation_deg);
-    s.calibration.max_rotation_deg = NonNegative(c, "max_rotation_deg", s.calibration.max_rotation_deg);
-    if (s.calibration.max_rotation_deg < s.calibration.min_rotation_deg) {
-      c.Fail("max_rotation_deg", "expected >= min_rotation_deg");
-    }
-  }
+  ReadContents(f, &s);
   if (s.kind == SceneKind::kCalibration && s.lines.empty()) {
     f.Fail("lines", "a calibration scene needs painted lines");
   }

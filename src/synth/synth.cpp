@@ -64,6 +64,62 @@ cv::Mat RangeToMillimetres(const cv::Mat& range_m) {
   return mm;
 }
 
+// CAN log: the ego profile sampled at 100 Hz over the frames' time span and a little beyond.
+void WriteCanLog(const Scene& scene, int frames, const std::string& path) {
+  AtomicOutputFile can(path);
+  can.stream() << "t,speed,yaw_rate\n";
+  const double t_end = scene.FrameTime(frames - 1) + 0.2;
+  for (int i = 0; i * (1.0 / kCanRateHz) <= t_end + 1e-9; ++i) {
+    const MotionSample m = scene.ego.At(i / kCanRateHz);
+    can.stream() << i / kCanRateHz << "," << m.speed_mps << "," << m.yaw_rate_radps << "\n";
+  }
+  can.Commit();
+}
+
+// Each camera's outputs in the temporary folder: image folders, MJPG videos, truth images.
+class CameraOutputs {
+ public:
+  CameraOutputs(const Rig& rig, double fps, const fs::path& tmp, const SynthOptions& options, const std::string& out_dir)
+      : tmp_(tmp), options_(options) {
+    for (const RigCamera& c : rig.cameras) {
+      names_.push_back(c.name);
+      if (options.write_png) fs::create_directories(tmp / c.name);
+      if (options.write_truth_images) {
+        fs::create_directories(tmp / "range" / c.name);
+        fs::create_directories(tmp / "ids" / c.name);
+      }
+      if (!options.write_video) continue;
+      video_tmp_.push_back((tmp / ("." + c.name + ".avi.tmp.avi")).string());
+      videos_.push_back(std::make_unique<cv::VideoWriter>(video_tmp_.back(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                                                          fps, cv::Size(c.model.width(), c.model.height())));
+      if (!videos_.back()->isOpened()) throw Error(Str(out_dir, ": cannot open a video writer (MJPG)"));
+    }
+  }
+
+  void Write(size_t c, int f, const RenderedView& view) {
+    if (options_.write_png) WriteImageAtomically((tmp_ / names_[c] / FrameName(f)).string(), view.image);
+    if (options_.write_video) videos_[c]->write(view.image);
+    if (options_.write_truth_images) {
+      WriteImageAtomically((tmp_ / "range" / names_[c] / FrameName(f)).string(), RangeToMillimetres(view.range_m));
+      WriteImageAtomically((tmp_ / "ids" / names_[c] / FrameName(f)).string(), view.ids);
+    }
+  }
+
+  // The videos under their final names.
+  void Close() {
+    for (size_t c = 0; c < videos_.size(); ++c) {
+      videos_[c]->release();
+      RenameReplacing(video_tmp_[c], (tmp_ / (names_[c] + ".avi")).string());
+    }
+  }
+
+ private:
+  fs::path tmp_;
+  const SynthOptions& options_;
+  std::vector<std::string> names_, video_tmp_;
+  std::vector<std::unique_ptr<cv::VideoWriter>> videos_;
+};
+
 }  // namespace
 
 std::vector<TruthRow> TruthAt(const FrameState& state, int frame) {
@@ -175,57 +231,17 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
     const SceneRenderer renderer(scene);
     WriteRig(scene_in.rig, (tmp / "rig.yaml").string());
     if (calibration) WriteRig(scene.rig, (tmp / "rig_true.yaml").string());
-
-    // CAN log: the ego profile sampled at 100 Hz over the frames' time span and a little beyond.
-    {
-      AtomicOutputFile can((tmp / "can.csv").string());
-      can.stream() << "t,speed,yaw_rate\n";
-      const double t_end = scene.FrameTime(frames - 1) + 0.2;
-      for (int i = 0; i * (1.0 / kCanRateHz) <= t_end + 1e-9; ++i) {
-        const MotionSample m = scene.ego.At(i / kCanRateHz);
-        can.stream() << i / kCanRateHz << "," << m.speed_mps << "," << m.yaw_rate_radps << "\n";
-      }
-      can.Commit();
-    }
+    WriteCanLog(scene, frames, (tmp / "can.csv").string());
+    CameraOutputs cameras(scene.rig, scene.fps, tmp, options, out_dir);
     AtomicOutputFile frames_csv((tmp / "frames.csv").string());
     frames_csv.stream() << "frame,t\n";
     std::vector<TruthRow> truth;
-    std::vector<std::string> names;
-    for (const RigCamera& c : scene.rig.cameras) {
-      names.push_back(c.name);
-      if (options.write_png) fs::create_directories(tmp / c.name);
-      if (options.write_truth_images) {
-        fs::create_directories(tmp / "range" / c.name);
-        fs::create_directories(tmp / "ids" / c.name);
-      }
-    }
-    std::vector<std::unique_ptr<cv::VideoWriter>> videos;
-    std::vector<std::string> video_tmp;
-    if (options.write_video) {
-      for (const RigCamera& c : scene.rig.cameras) {
-        video_tmp.push_back((tmp / ("." + c.name + ".avi.tmp.avi")).string());
-        videos.push_back(std::make_unique<cv::VideoWriter>(
-            video_tmp.back(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), scene.fps,
-            cv::Size(c.model.width(), c.model.height())));
-        if (!videos.back()->isOpened()) throw Error(Str(out_dir, ": cannot open a video writer (MJPG)"));
-      }
-    }
-
     for (int f = 0; f < frames; ++f) {
       const double t = scene.FrameTime(f);
       const FrameState state = renderer.StateAt(t);
       frames_csv.stream() << f << "," << t << "\n";
       for (const TruthRow& r : TruthAt(state, f)) truth.push_back(r);
-      for (size_t c = 0; c < names.size(); ++c) {
-        const RenderedView view = renderer.Render(state, c, f);
-        if (options.write_png) WriteImageAtomically((tmp / names[c] / FrameName(f)).string(), view.image);
-        if (options.write_video) videos[c]->write(view.image);
-        if (options.write_truth_images) {
-          WriteImageAtomically((tmp / "range" / names[c] / FrameName(f)).string(),
-                               RangeToMillimetres(view.range_m));
-          WriteImageAtomically((tmp / "ids" / names[c] / FrameName(f)).string(), view.ids);
-        }
-      }
+      for (size_t c = 0; c < scene.rig.cameras.size(); ++c) cameras.Write(c, f, renderer.Render(state, c, f));
       if (calibration && f == 0) {
         WriteMarks(SampleMarks(renderer, state, scene.calibration.mark_noise_px),
                    (tmp / "marks.csv").string());
@@ -234,10 +250,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
     }
     frames_csv.Commit();
     WriteTruth(truth, (tmp / "truth.csv").string());
-    for (size_t c = 0; c < videos.size(); ++c) {
-      videos[c]->release();
-      RenameReplacing(video_tmp[c], (tmp / (names[c] + ".avi")).string());
-    }
+    cameras.Close();
   } catch (...) {
     std::error_code ec;
     fs::remove_all(tmp, ec);

@@ -81,6 +81,9 @@ class SurroundPipeline {
   const Coverage& coverage() const { return coverage_; }
 
  private:
+  // The frame's detections from the sources that ran, stamped with the frame and fused; the
+  // frame's grey images kept for the next frame's side views.
+  void Collect(const FrameInput& in, bool sides, const cv::Mat grey[2], FrameOutput* out);
   Rig rig_;
   PipelineOptions options_;
   Coverage coverage_;
