@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
     cv::Mat l, r;
     cv::resize(left, l, cv::Size(c.w, c.h), 0, 0, cv::INTER_AREA);
     cv::resize(right, r, cv::Size(c.w, c.h), 0, 0, cv::INTER_AREA);
-    for (const auto [lr, levels] : {std::pair{false, 2}, std::pair{true, 2}, std::pair{true, 1}}) {
+    for (const auto& [lr, levels] : {std::pair{false, 2}, std::pair{true, 2}, std::pair{true, 1}}) {
       dps::StereoOptions o;
       o.num_disparities = c.d;
       o.left_right_check = lr;
@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
   const std::string scene_path = args.size() > 2 ? args[2] : "data/scenes/lead_car.yaml";
   std::printf("\n| omni size | views | front ms | sides ms | fusion ms | tracks ms | grid ms | picture ms | frame ms | frames/s | StereoBM ms | frame / BM |\n"
               "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
-  for (const auto [ow, oh] : {std::pair{320, 240}, std::pair{640, 480}, std::pair{1024, 1024}}) {
+  for (const auto& [ow, oh] : {std::pair{320, 240}, std::pair{640, 480}, std::pair{1024, 1024}}) {
     dps::Scene scene = dps::ReadScene(scene_path);
     dps::ResizeScene(&scene, ow, oh);
     scene.render.supersample = 1;

@@ -18,9 +18,14 @@ inline int& Checks() {
   return checks;
 }
 
-// Prints a summary line and returns the exit code for main.
+// Prints a summary line and returns the exit code for main: failure when a check failed or when
+// no check ran at all (a test that checks nothing proves nothing).
 inline int Report() {
   std::cout << Checks() - Failures() << " passed, " << Failures() << " failed" << std::endl;
+  if (Checks() == 0) {
+    std::cerr << "no check ran" << std::endl;
+    return 1;
+  }
   return Failures() == 0 ? 0 : 1;
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/calib/auto_marks.h"
 #include "dps/calib/vanishing_points.h"
 #include "dps/synth/scene_io.h"
@@ -17,7 +18,7 @@
 
 namespace {
 
-const std::string kSource = DPS_SOURCE_DIR;
+using dps_test::kSource;
 constexpr double kMaxErrorDeg = 0.5;
 constexpr int kSeeds = 5;
 

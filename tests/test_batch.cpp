@@ -7,6 +7,7 @@
 #include <set>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/pipeline/batch.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
@@ -16,14 +17,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::string kSource = DPS_SOURCE_DIR;
+using dps_test::kSource;
 const fs::path kTmp = fs::temp_directory_path() / "dps_test_batch";
 
 // Three copies of a short rendered drive and a folder that is no drive.
 std::vector<std::string> MakeDrives() {
-  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/lead_car.yaml");
-  dps::ResizeScene(&scene, 320, 240);
-  scene.render.supersample = 1;
+  dps::Scene scene = dps_test::SmallScene("lead_car", 320, 240);
   dps::SynthOptions so;
   so.frames = 4;
   so.overwrite = true;

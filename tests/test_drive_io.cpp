@@ -8,6 +8,7 @@
 #include <opencv2/videoio.hpp>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/detect/detection_io.h"
 #include "dps/pipeline/drive_io.h"
 #include "dps/pipeline/drive_processing.h"
@@ -20,8 +21,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kReal = DPS_REAL_DATA_DIR;
-const std::string kSource = DPS_SOURCE_DIR;
+const std::string kReal = dps_test::kRealData;
+using dps_test::kSource;
 const fs::path kTmp = fs::temp_directory_path() / "dps_test_drive_io";
 
 constexpr double kInsPathM = 1011.8;       // data/real/README.md
@@ -120,9 +121,7 @@ void TestComma2k19() {
 }
 
 void TestProcessDrive() {
-  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/lead_car.yaml");
-  dps::ResizeScene(&scene, 320, 240);
-  scene.render.supersample = 1;
+  dps::Scene scene = dps_test::SmallScene("lead_car", 320, 240);
   dps::SynthOptions so;
   so.frames = 6;
   so.overwrite = true;

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/camera/rig_io.h"
 #include "dps/detect/ground_projection.h"
 #include "dps/stereo/sad_stereo.h"
@@ -16,9 +17,9 @@ namespace {
 
 constexpr double kTolM = 1e-7;    // ground points from exact pixels
 constexpr double kTolPx = 1e-4;   // float road disparity
-const std::string kSource = DPS_SOURCE_DIR;
+using dps_test::kSource;
 
-dps::Rig OmniRig() { return dps::ReadRig(kSource + "/data/rigs/omni_pair.yaml"); }
+using dps_test::OmniRig;
 
 // The shipped rig with both cameras turned (pitch about X, roll about Z) and the right one lower.
 dps::Rig TurnedRig() {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/map/occupancy_grid.h"
 #include "dps/pipeline/surround_pipeline.h"
 #include "dps/synth/scene_io.h"
@@ -19,15 +20,14 @@
 
 namespace {
 
-const std::string kSource = DPS_SOURCE_DIR;
+using dps_test::kSource;
 constexpr double kNearTruthM = 0.5;       // occupied cells within this of a footprint
 constexpr double kOccupiedFraction = 0.9; // of the occupied cells near the cars
 constexpr double kSideCoverage = 0.7;     // of the points along the cars' sides seen so far
 constexpr double kFreeFraction = 0.9;     // of the cells of the lane ahead and beside
 
 void TestParkedCarsGrid() {
-  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
-  scene.render.supersample = 1;
+  dps::Scene scene = dps_test::SmallScene("parked_cars");
   const int frames = 30;  // 2 s at 8 m/s: car 1 passed, car 2 beside, cars 3-4 ahead
   const dps::SceneRenderer renderer(scene);
   size_t left = 0, right = 0;

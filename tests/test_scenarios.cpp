@@ -16,6 +16,7 @@
 #include <string>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/camera/rig_io.h"
 #include "dps/detect/detection.h"
 #include "dps/detect/detection_io.h"
@@ -31,7 +32,7 @@
 
 namespace {
 
-const std::string kSource = DPS_SOURCE_DIR;
+using dps_test::kSource;
 const std::string kWork = DPS_WORK_DIR;
 constexpr double kMovingVelocityTolMps = 0.5;
 constexpr double kParkedVelocityTolMps = 0.3;

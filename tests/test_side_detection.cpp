@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/detect/side_detection.h"
 #include "dps/pipeline/surround_pipeline.h"
 #include "dps/synth/scene_io.h"
@@ -18,7 +19,7 @@
 
 namespace {
 
-const std::string kSource = DPS_SOURCE_DIR;
+using dps_test::kSource;
 constexpr double kSideTolM = 0.3;        // points off the visible side of the car, m
 constexpr double kRangeTolFraction = 0.08;  // near point of the detection vs truth
 constexpr double kVelocityTolMps = 0.5;     // ground velocity from depth x disparity
@@ -34,9 +35,7 @@ struct Pair {
 
 // Frames 0 and 1 of a straight drive at 8 m/s with one car; the images of `camera`.
 Pair Render(const dps::SceneObject& car, const std::string& camera, int width, int height) {
-  dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
-  dps::ResizeScene(&scene, width, height);
-  scene.render.supersample = 1;
+  dps::Scene scene = dps_test::SmallScene("parked_cars", width, height);
   scene.objects = {car};
   const dps::SceneRenderer renderer(scene);
   size_t index = 0;
@@ -176,9 +175,7 @@ void TestContinuing() {
     car.start.x_m = side == dps::Side::kRight ? 3.4 : -3.4;
     car.start.z_m = 3.0;
     car.colour = 2;
-    dps::Scene scene = dps::ReadScene(kSource + "/data/scenes/parked_cars.yaml");
-    dps::ResizeScene(&scene, 320, 240);
-    scene.render.supersample = 1;
+    dps::Scene scene = dps_test::SmallScene("parked_cars", 320, 240);
     scene.objects = {car};
     const dps::SceneRenderer renderer(scene);
     const size_t index = side == dps::Side::kRight ? 1 : 0;

@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/stereo/disparity_io.h"
 #include "dps/stereo/sad_stereo.h"
 #include "dps/util/error.h"
@@ -27,7 +28,7 @@ constexpr double kBadThresholdPx = 1.0;   // Middlebury: |d - d_gt| > 1 is bad
 constexpr double kKittiRoadVsSgbmPx = 1.0;  // road rows: dps's median vs StereoSGBM's
 constexpr double kKittiRoadVsLinePx = 2.0;  // ... and vs the documented (approximate) 0.31 (v - 176)
 
-const std::string kReal = DPS_REAL_DATA_DIR;
+const std::string kReal = dps_test::kRealData;
 
 cv::Mat Texture(int w, int h, unsigned seed) {
   cv::Mat t(h, w, CV_8U);

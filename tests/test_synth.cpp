@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "check.h"
+#include "fixtures.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
 #include "dps/util/csv.h"
@@ -29,13 +30,10 @@ constexpr double kMinFaceCosine = 0.2;         // faces seen more obliquely are 
 constexpr double kMaxFootprintRangeM = 20.0;   // farther, a 320x240 object is a few pixels wide
 
 const fs::path kTmp = fs::temp_directory_path() / "dps_test_synth";
-const std::string kScenes = std::string(DPS_SOURCE_DIR) + "/data/scenes/";
+const std::string kScenes = dps_test::kSource + "/data/scenes/";
 
 dps::Scene Load(const std::string& name, int width = 320, int height = 240) {
-  dps::Scene s = dps::ReadScene(kScenes + name + ".yaml");
-  dps::ResizeScene(&s, width, height);
-  s.render.supersample = 1;
-  return s;
+  return dps_test::SmallScene(name, width, height);
 }
 
 // The scene's rig with every camera replaced by an equivalent of another model.

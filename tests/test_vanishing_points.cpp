@@ -80,15 +80,6 @@ Setup MakeSetup(std::uint64_t seed) {
   return s;
 }
 
-double WorstError(const dps::Rig& estimate, const dps::Rig& truth) {
-  double worst = 0;
-  for (const dps::RigCamera& c : truth.cameras) {
-    worst = std::max(worst, dps::RotationAngleDeg(estimate.Camera(c.name).vehicle_from_camera.R,
-                                                  c.vehicle_from_camera.R));
-  }
-  return worst;
-}
-
 // The residual vertical disparity of a rectified front pair (a virtual pinhole view looking along
 // +Z, rows parallel to the baseline, focal length f_px) built with estimated rotations: a world
 // point is seen by each true camera and mapped into the view through the estimated rotation;
