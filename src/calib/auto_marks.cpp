@@ -8,8 +8,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dps/calib/vanishing_points.h"
-#include "dps/stereo/virtual_view.h"
 #include "dps/util/error.h"
+#include "dps/util/image.h"
 
 namespace dps {
 namespace {

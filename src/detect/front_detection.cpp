@@ -10,6 +10,7 @@
 
 #include "dps/detect/ground_projection.h"
 #include "dps/util/error.h"
+#include "dps/util/image.h"
 
 namespace dps {
 FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options) : options_(options), rig_(rig) {

@@ -7,6 +7,7 @@
 
 #include "dps/detect/ground_projection.h"
 #include "dps/util/error.h"
+#include "dps/util/image.h"
 
 namespace dps {
 namespace {

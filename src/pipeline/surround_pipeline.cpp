@@ -11,6 +11,7 @@
 
 #include "dps/stereo/virtual_view.h"
 #include "dps/util/error.h"
+#include "dps/util/image.h"
 
 namespace dps {
 namespace {

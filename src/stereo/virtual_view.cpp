@@ -37,13 +37,6 @@ ViewSpec CentredSpec(int width, int height, double focal_px, const Eigen::Vector
 
 }  // namespace
 
-cv::Mat GreyImage(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat grey;
-  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-  return grey;
-}
-
 ViewSpec FrontViewSpec(const Rig& rig, const std::string& left_camera,
                        const std::string& right_camera, int width, int height, double focal_px) {
   const Eigen::Vector3d baseline =

@@ -115,9 +115,6 @@ class SideViewCache {
   std::list<std::pair<long, std::unique_ptr<VirtualView>>> views_;  // most recent first
 };
 
-// The image as one grey channel (BGR converted; grey returned as it is).
-cv::Mat GreyImage(const cv::Mat& image);
-
 // CV_8U, 255 where the view pixel's ray meets the own car, modelled as a box of the rig's
 // vehicle length and width and `height_m` (metres above the road) around the vehicle origin:
 // the bonnet and doors that every mirror-mounted camera sees, which must not count as obstacles.
