@@ -34,8 +34,8 @@ struct FrontDetectorOptions {
   int link_max_gap = 60;
   double link_max_gap_m = 6.0;
   // ... and whose tops differ by at most this (the height above the road three quarters of a
-  // part's columns reach with their highest pixel), m; 0 = no such test. The measured tops of
-  // one car's parts spread by up to about 1 m (faces matched part way up); a pole is 3 m tall.
+  // part's columns reach with their highest pixel), m; 0 = no such test. One car's parts reach
+  // different heights (faces matched part way up), a pole beyond a car much higher.
   double link_max_top_difference_m = 1.2;
   // ... and, when more than link_free_gap_m apart on the ground, only if together (first column
   // to last) at most link_vehicle_length_m long: one vehicle's textureless stretch, not two

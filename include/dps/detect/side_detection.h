@@ -42,14 +42,11 @@ struct SideDetectorOptions {
   HistogramOptions histogram;  // its range is the stereo range; scored two-sided
   double max_range_m = 40.0;   // points farther than this are dropped
   // ... and points deeper than this along the view's axis: motion stereo's depth error grows with
-  // depth squared over f B (about 0.8 m at 6 m, 7 m/s, 15 fps, 640x480), m
+  // depth squared over f B, m
   double max_depth_m = 6.0;
   double own_car_height_m = 0.9;
   double min_baseline_m = 0.05;       // camera displacement below this: no motion stereo
   double min_obstacle_height_m = 0.5; // components lower than this (median) are dropped
-  // Below the bottom-most matched pixel, pixels with no disparity (up to this height at the
-  // object's depth) or with the object's disparity (within the tolerance) still count as the
-  // object: the contact with the road is the lowest of them.
   // At speed the camera moves far between frames, and a static object beside the car has the
   // disparity f B / D (D: its distance from the camera across the view). To keep objects down to
   // min_static_distance_m inside the disparity range, the views shrink (focal length and size
@@ -69,18 +66,19 @@ struct SideDetectorOptions {
   // m, > 0.
   double max_contact_jump_m = 1.0;
   double disparity_sigma_px = 1.0;    // matching noise, for the velocity's uncertainty
+  // Below the bottom-most matched pixel, pixels with no disparity (up to max_gap_below_m at the
+  // object's depth) or with the object's disparity (within contact_tolerance_px) still count as
+  // the object: the contact with the road is the lowest of them.
   double max_gap_below_m = 0.6;
   double contact_tolerance_px = 1.5;
   // Block matching carries the object's disparity up to half a window below its bottom edge
   // (vertical foreground fattening): the contact is taken this many rows above the lowest pixel,
-  // >= 0. DefaultPipelineOptions: 2 with 9x9 windows (measured: the rendered cars' sides came
-  // out 0.1-0.2 m too close at 640x480), 0 with 7x7 (no such bias at 320x240).
+  // >= 0. DefaultPipelineOptions: 2 with 9x9 windows, 0 with 7x7.
   int contact_trim_rows = 0;
   // An object keeping pace with us (|disparity| below min_motion_disparity_px) over road whose
   // disparity at the contact differs from the object's by more than this: the windows carry the
-  // object's disparity down over the road by up to half a window (measured: a car pacing us at
-  // 6-7 m in a turn was placed 1-1.5 m short), so the contact is taken half a window above the
-  // lowest pixel. px, > 0.
+  // object's disparity down over the road by up to half a window, so the contact is taken half a
+  // window above the lowest pixel. px, > 0.
   double pacing_road_contrast_px = 5.0;
 
   SideDetectorOptions();

@@ -1,5 +1,5 @@
-// dps — an occupancy grid on the ground, fused over time with the ego motion (seeds/004,
-// sections 4.4-4.5).
+// dps — an occupancy grid on the ground, fused over time with the ego motion (the fisheye
+// obstacle-detection summary, AJAST 2017, after Häne et al., IROS 2015, sections 4.4-4.5).
 //
 // The grid is fixed to the ground (the tracker's world frame: the vehicle's pose integrated from
 // CAN) and re-centred by whole cells when the vehicle nears its edge, so nothing smears as the car

@@ -1,5 +1,6 @@
-// dps — tracking obstacles over frames with a Kalman filter per object (seeds/004, section 4.3;
-// the first paper's wish for objects with position and velocity).
+// dps — tracking obstacles over frames with a Kalman filter per object (the fisheye obstacle-
+// detection summary, AJAST 2017, after Häne et al., IROS 2015, section 4.3; Gandhi & Trivedi's
+// wish for objects with position and velocity).
 //
 // State per track: position, ground velocity and turn rate (px, pz, vx, vz, w) in a world frame
 // that the ego motion (CAN speed and yaw rate) carries the vehicle through, so that parked things
