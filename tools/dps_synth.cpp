@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli.h"
+#include "dps/synth/randomize.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
 
@@ -21,6 +22,11 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
   --size WxH         image size, e.g. 320x240 (the rig's cameras are rescaled)
   --seed N           random seed of textures, noise and calibration perturbations
   --frames N         render only the first N frames
+  --randomize SEED   draw the camera family and model, the field of view, the mounting, a
+                     calibration error, the appearance and the objects reproducibly from SEED
+                     (docs/robustness.md): rig.yaml is then the rig to process with (the
+                     rendering rig turned by the calibration error), rig_true.yaml the rendering
+                     rig, randomization.json every draw; drawn video replaces the PNG folders
   --video            also write left.avi and right.avi (MJPG)
   --no-png           do not write the PNG folders (needs --video)
   --truth-images     also write range/<camera>/ (16-bit mm) and ids/<camera>/ truth images
@@ -33,7 +39,7 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
 
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-synth", [&] {
-    const dps_cli::Args args(argc, argv, {"out", "size", "seed", "frames"},
+    const dps_cli::Args args(argc, argv, {"out", "size", "seed", "frames", "randomize"},
                              {"video", "no-png", "truth-images", "force", "quiet"});
     if (args.help()) {
       std::cout << kUsage;
@@ -60,6 +66,18 @@ int main(int argc, char** argv) {
     if (args.Has("frames") && options.frames < 1) throw dps::Error("option --frames: expected >= 1");
     options.write_video = args.Has("video");
     options.write_png = !args.Has("no-png");
+    if (args.Has("randomize")) {
+      const int seed = args.Integer("randomize", 0);
+      if (seed < 0) throw dps::Error("option --randomize: expected a non-negative integer");
+      const dps::RandomizedScene r = dps::Randomize(scene, static_cast<std::uint64_t>(seed));
+      scene = r.scene;
+      options.processing_rig = r.processing_rig;
+      options.extra_files["randomization.json"] = r.ToJson(static_cast<std::uint64_t>(seed));
+      if (r.video) {
+        options.write_video = true;
+        options.write_png = false;
+      }
+    }
     options.write_truth_images = args.Has("truth-images");
     options.overwrite = args.Has("force");
     const bool tty = isatty(STDERR_FILENO);

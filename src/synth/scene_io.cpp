@@ -198,6 +198,13 @@ Scene ReadScene(const std::string& path) {
     if (s.render.supersample < 1 || s.render.supersample > 8) r.Fail("supersample", "expected 1..8");
     s.render.noise_sigma = NonNegative(r, "noise_sigma", s.render.noise_sigma);
     s.render.blur_sigma_px = NonNegative(r, "blur_sigma_px", s.render.blur_sigma_px);
+    s.render.sky_brightness = Positive(r, "sky_brightness", s.render.sky_brightness);
+    s.render.ground_brightness = Positive(r, "ground_brightness", s.render.ground_brightness);
+    s.render.ground_contrast = NonNegative(r, "ground_contrast", s.render.ground_contrast);
+    s.render.texture_scale = Positive(r, "texture_scale", s.render.texture_scale);
+    s.render.exposure = Positive(r, "exposure", s.render.exposure);
+    s.render.vignetting = NonNegative(r, "vignetting", s.render.vignetting);
+    if (s.render.vignetting > 1) r.Fail("vignetting", "expected 0..1");
   }
   s.ego = ReadMotion(f, "ego");
   if (f.Has("road")) {

@@ -210,13 +210,35 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
   return best;
 }
 
+namespace {
+
+// Exposure gain and vignetting (1 - v r^4 with r the distance from the centre over the half
+// diagonal) on a rendered CV_32FC3 image; nothing at the defaults.
+void ApplyExposure(const RenderOptions& render, cv::Mat* image) {
+  if (render.exposure != 1.0) *image *= render.exposure;
+  if (render.vignetting <= 0.0) return;
+  const double cx = (image->cols - 1) / 2.0, cy = (image->rows - 1) / 2.0;
+  const double r2_max = cx * cx + cy * cy;
+  for (int v = 0; v < image->rows; ++v) {
+    cv::Vec3f* row = image->ptr<cv::Vec3f>(v);
+    for (int u = 0; u < image->cols; ++u) {
+      const double r2 = ((u - cx) * (u - cx) + (v - cy) * (v - cy)) / r2_max;
+      row[u] *= static_cast<float>(1.0 - render.vignetting * r2 * r2);
+    }
+  }
+}
+
+}  // namespace
+
 cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, const RayHit& hit,
                                const Eigen::Vector3d& light) const {
   const auto seed = static_cast<std::uint32_t>(scene_.seed * 2654435761u);
+  const RenderOptions& render = scene_.render;
   switch (hit.id) {
     case kIdSky: {
       const float e = static_cast<float>(std::clamp(-d.y(), 0.0, 1.0));
-      return cv::Vec3f(0.86f, 0.82f, 0.76f) * (1 - e) + cv::Vec3f(0.80f, 0.58f, 0.35f) * e;
+      const cv::Vec3f sky = cv::Vec3f(0.86f, 0.82f, 0.76f) * (1 - e) + cv::Vec3f(0.80f, 0.58f, 0.35f) * e;
+      return render.sky_brightness == 1.0 ? sky : sky * static_cast<float>(render.sky_brightness);
     }
     case kIdOwnCar: {
       const double n = Fbm(hit.point_vehicle.x() + hit.point_vehicle.y(), hit.point_vehicle.z(), 0.3, 2, seed + 5);
@@ -225,13 +247,16 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
     case kIdGround:
     case kIdPaint: {
       const Eigen::Vector3d& w = hit.point_world;
-      const double n = Fbm(w.x(), w.z(), 0.8, 4, seed + 11);
+      const double k = render.texture_scale;
+      const double n = Fbm(w.x(), w.z(), 0.8 * k, 4, seed + 11);
       if (hit.id == kIdPaint) return cv::Vec3f::all(static_cast<float>(0.78 + 0.12 * n));
       // Asphalt: patches at 0.8 m, and aggregate at 0.25 m and 0.06 m that correlation stereo
       // can lock on to (real asphalt is textured down to the pixel).
-      const double mid = Fbm(w.x(), w.z(), 0.25, 2, seed + 23);
-      const double grain = Fbm(w.x(), w.z(), 0.06, 2, seed + 37);
-      const float g = static_cast<float>(0.30 + 0.14 * (n - 0.5) + 0.16 * (mid - 0.5) + 0.14 * (grain - 0.5));
+      const double mid = Fbm(w.x(), w.z(), 0.25 * k, 2, seed + 23);
+      const double grain = Fbm(w.x(), w.z(), 0.06 * k, 2, seed + 37);
+      const double c = render.ground_contrast;
+      const float g = static_cast<float>(0.30 * render.ground_brightness + c * 0.14 * (n - 0.5) +
+                                         c * 0.16 * (mid - 0.5) + c * 0.14 * (grain - 0.5));
       return cv::Vec3f(g, g * 1.01f, g * 1.03f);
     }
     default: break;
@@ -318,6 +343,7 @@ RenderedView SceneRenderer::Render(const FrameState& st, size_t camera_index,
       }
     }
   });
+  ApplyExposure(scene_.render, &out.image);
   if (scene_.render.blur_sigma_px > 0.0) {
     cv::GaussianBlur(out.image, out.image, cv::Size(), scene_.render.blur_sigma_px);
   }

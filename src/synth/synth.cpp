@@ -229,8 +229,9 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
   fs::create_directories(tmp);
   try {
     const SceneRenderer renderer(scene);
-    WriteRig(scene_in.rig, (tmp / "rig.yaml").string());
-    if (calibration) WriteRig(scene.rig, (tmp / "rig_true.yaml").string());
+    WriteRig(options.processing_rig ? *options.processing_rig : scene_in.rig, (tmp / "rig.yaml").string());
+    if (calibration || options.processing_rig) WriteRig(scene.rig, (tmp / "rig_true.yaml").string());
+    for (const auto& [name, content] : options.extra_files) WriteFileAtomically((tmp / name).string(), content);
     WriteCanLog(scene, frames, (tmp / "can.csv").string());
     CameraOutputs cameras(scene.rig, scene.fps, tmp, options, out_dir);
     AtomicOutputFile frames_csv((tmp / "frames.csv").string());

@@ -52,11 +52,18 @@ struct PaintedLine {
   double width_m = 0.12;         // > 0
 };
 
-// How images are rendered.
+// How images are rendered. The appearance settings scale the renderer's own sky, asphalt and
+// exposure; their defaults (1, 0) render the shipped look.
 struct RenderOptions {
   int supersample = 2;        // samples per pixel along each axis, 1..8 (anti-aliasing)
   double noise_sigma = 2.0;   // Gaussian image noise, grey levels, >= 0
   double blur_sigma_px = 0.0; // Gaussian blur after rendering, pixels, >= 0 (0 = none)
+  double sky_brightness = 1.0;    // factor on the sky's colour, > 0
+  double ground_brightness = 1.0; // factor on the asphalt's mean grey, > 0
+  double ground_contrast = 1.0;   // factor on the asphalt texture's amplitude, >= 0
+  double texture_scale = 1.0;     // factor on the asphalt texture's feature sizes, > 0
+  double exposure = 1.0;          // factor on every rendered colour (before noise), > 0
+  double vignetting = 0.0;        // darkening at the image corners, fraction 0..1 (cos^4-like)
 };
 
 // Calibration-scene settings (kind == kCalibration).

@@ -10,6 +10,8 @@
 #pragma once
 
 #include <functional>
+#include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,11 @@ struct SynthOptions {
   bool write_truth_images = false;// range/ and ids/ folders
   int frames = -1;                // > 0: render only this many frames
   bool overwrite = false;         // replace an existing output folder
+  // A drive processed with another rig than the one that renders (a calibration error): that rig
+  // is written as rig.yaml and the rendering rig as rig_true.yaml. Unset: rig.yaml renders.
+  std::optional<Rig> processing_rig;
+  // More files written into the folder with it (name -> content), e.g. randomization.json.
+  std::map<std::string, std::string> extra_files;
   // Called after each frame with (frames done, frames in all); may print progress.
   std::function<void(int, int)> progress;
 };

@@ -1,0 +1,251 @@
+#include "dps/synth/randomize.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Geometry>
+
+#include "dps/util/error.h"
+
+namespace dps {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+// splitmix64: the same numbers on every platform (std's distributions are not).
+class Draws {
+ public:
+  Draws(std::uint64_t seed, RandomizedScene* out) : state_(seed), out_(out) {}
+  std::uint64_t Next() {
+    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  // Uniform in [lo, hi), recorded under `name` (empty: not recorded).
+  double Uniform(double lo, double hi, const std::string& name = "") {
+    const double v = lo + (hi - lo) * static_cast<double>(Next() >> 11) * 0x1.0p-53;
+    if (!name.empty()) out_->draws.emplace_back(name, v);
+    return v;
+  }
+  int Index(int n) { return static_cast<int>(Next() % static_cast<std::uint64_t>(n)); }
+  bool Chance(double p) { return Uniform(0.0, 1.0) < p; }
+  // A rotation by an angle uniform in [0, max_rad] about a uniformly drawn axis.
+  Eigen::Matrix3d Rotation(double max_rad, const std::string& name) {
+    const double z = Uniform(-1.0, 1.0), phi = Uniform(0.0, 2 * kPi);
+    const double r = std::sqrt(std::max(0.0, 1 - z * z));
+    const double angle = Uniform(0.0, max_rad);
+    out_->draws.emplace_back(name, angle / kDeg);
+    return AxisAngle(Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z), angle);
+  }
+
+ private:
+  std::uint64_t state_;
+  RandomizedScene* out_;
+};
+
+const char* const kFamilies[] = {"hyperbolic", "unified", "fisheye_down", "fisheye_side"};
+
+// Radius on the normalised image plane of a ray at angle theta from a mirror's axis.
+double MirrorRadius(double a, double b, double theta) { return std::sin(theta) / (a * std::cos(theta) + b); }
+
+double FisheyeRadius(const std::array<double, 4>& k, double theta) {
+  const double t2 = theta * theta;
+  return theta * (1 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))));
+}
+
+// One camera's intrinsics for the family, with the field's end and image circle drawn.
+CameraModel DrawModel(const std::string& family, int w, int h, const RandomizeOptions& o, const std::string& name,
+                      Draws* d) {
+  const double scale = w / 640.0;
+  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
+  K(0, 2) = (w - 1) / 2.0 + d->Uniform(-1, 1, name + ".cx_offset_px") * o.principal_offset_max_px * scale;
+  K(1, 2) = (h - 1) / 2.0 + d->Uniform(-1, 1, name + ".cy_offset_px") * o.principal_offset_max_px * scale;
+  const double aspect = 1.0 + d->Uniform(-o.aspect_max_deviation, o.aspect_max_deviation, name + ".aspect");
+  if (family == "fisheye_side") {
+    // A lens of 190-200 degrees whose image circle may be cut by the image's top and bottom.
+    const std::array<double, 4> k{d->Uniform(-0.02, 0.02, name + ".k1"), d->Uniform(-0.002, 0.002, name + ".k2"), 0, 0};
+    const double half_fov = d->Uniform(95.0, 100.0, name + ".half_fov_deg") * kDeg;
+    const double rim = d->Uniform(0.95, 1.25, name + ".circle_fraction") * h / 2.0;
+    K(0, 0) = rim / FisheyeRadius(k, half_fov);
+    K(1, 1) = K(0, 0) * aspect;
+    return CameraModel::Fisheye(w, h, K, k, rim);
+  }
+  // Axis down: the field ends field_edge degrees above the horizon, at the image circle.
+  const double edge = d->Uniform(o.field_edge_min_deg, o.field_edge_max_deg, name + ".field_edge_deg") * kDeg;
+  const double theta = kPi / 2 + edge;
+  const double rim = d->Uniform(0.88, 0.98, name + ".circle_fraction") * std::min(w, h) / 2.0;
+  if (family == "fisheye_down") {
+    const std::array<double, 4> k{d->Uniform(-0.02, 0.02, name + ".k1"), d->Uniform(-0.002, 0.002, name + ".k2"), 0, 0};
+    K(0, 0) = rim / FisheyeRadius(k, theta);
+    K(1, 1) = K(0, 0) * aspect;
+    return CameraModel::Fisheye(w, h, K, k, rim);
+  }
+  // Mirrors: xi = b / a from 0.75 (the field reaches at least 48 degrees above the horizon) to 0.97.
+  const double xi = d->Uniform(0.75, 0.97, name + ".xi");
+  const double a = family == "unified" ? 1.0 : d->Uniform(1.0, 1.3, name + ".a");
+  K(0, 0) = rim / MirrorRadius(a, xi * a, theta);
+  K(1, 1) = K(0, 0) * aspect;
+  if (family == "unified") return CameraModel::Unified(w, h, K, xi, rim);
+  return CameraModel::Hyperbolic(w, h, K, a, xi * a, rim);
+}
+
+// The nominal orientation: axis down (omni, fisheye_down) or looking out sideways and tilted down.
+Eigen::Matrix3d NominalRotation(const std::string& family, bool left, double tilt_rad) {
+  Eigen::Matrix3d R;
+  if (family != "fisheye_side") {
+    R.col(0) = Eigen::Vector3d(1, 0, 0);
+    R.col(1) = Eigen::Vector3d(0, 0, -1);
+    R.col(2) = Eigen::Vector3d(0, 1, 0);
+    return R;
+  }
+  const double s = std::sin(tilt_rad), c = std::cos(tilt_rad);
+  // Columns: image x, image y (down), optical axis, in the vehicle frame (Y down, Z forward).
+  if (left) {
+    R.col(0) = Eigen::Vector3d(0, 0, 1);
+    R.col(1) = Eigen::Vector3d(s, c, 0);
+    R.col(2) = Eigen::Vector3d(-c, s, 0);
+  } else {
+    R.col(0) = Eigen::Vector3d(0, 0, -1);
+    R.col(1) = Eigen::Vector3d(-s, c, 0);
+    R.col(2) = Eigen::Vector3d(c, s, 0);
+  }
+  return R;
+}
+
+void DrawRig(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
+  Rig& rig = r->scene.rig;
+  rig.vehicle.length_m = d->Uniform(4.2, 5.2, "vehicle.length_m");
+  rig.vehicle.width_m = d->Uniform(1.7, 2.0, "vehicle.width_m");
+  for (RigCamera& c : rig.cameras) {
+    const bool left = c.name == "left";
+    const std::string name = c.name;
+    c.model = DrawModel(r->camera_family, c.model.width(), c.model.height(), o, name, d);
+    const double tilt =
+        d->Uniform(o.side_fisheye_tilt_min_deg, o.side_fisheye_tilt_max_deg,
+                   r->camera_family == "fisheye_side" ? name + ".tilt_deg" : "") * kDeg;
+    c.vehicle_from_camera.R =
+        d->Rotation(o.mount_rotation_max_deg * kDeg, name + ".mount_rotation_deg") * NominalRotation(r->camera_family, left, tilt);
+    const double out = rig.vehicle.width_m / 2 + d->Uniform(0.05, 0.25, name + ".outside_m");
+    c.vehicle_from_camera.t = Eigen::Vector3d(left ? -out : out, -d->Uniform(o.height_min_m, o.height_max_m, name + ".height_m"),
+                                              d->Uniform(0.5, 1.3, name + ".forward_m"));
+  }
+  r->processing_rig = rig;
+  for (RigCamera& c : r->processing_rig.cameras) {
+    c.vehicle_from_camera.R =
+        d->Rotation(o.calibration_error_max_deg * kDeg, c.name + ".calibration_error_deg") * c.vehicle_from_camera.R;
+  }
+}
+
+void DrawAppearance(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
+  RenderOptions& render = r->scene.render;
+  render.noise_sigma = d->Uniform(1.0, 4.0, "render.noise_sigma");
+  render.blur_sigma_px = d->Chance(0.5) ? d->Uniform(0.3, 0.9, "render.blur_sigma_px") : 0.0;
+  render.sky_brightness = d->Uniform(0.8, 1.15, "render.sky_brightness");
+  render.ground_brightness = d->Uniform(0.7, 1.3, "render.ground_brightness");
+  render.ground_contrast = d->Uniform(0.5, 1.5, "render.ground_contrast");
+  render.texture_scale = d->Uniform(0.6, 1.6, "render.texture_scale");
+  render.exposure = d->Uniform(0.8, 1.2, "render.exposure");
+  render.vignetting = d->Uniform(0.0, 0.4, "render.vignetting");
+  r->scene.seed = d->Next() % 1000000;
+  r->video = d->Chance(o.video_fraction);
+}
+
+// Speeds (and yaw rates when mirrored) of a motion profile.
+MotionProfile Scaled(const MotionProfile& m, double speed_factor, bool mirror) {
+  std::vector<MotionSample> samples = m.samples();
+  for (MotionSample& s : samples) {
+    s.speed_mps *= speed_factor;
+    if (mirror) s.yaw_rate_radps = -s.yaw_rate_radps;
+  }
+  return MotionProfile(samples);
+}
+
+void DrawObjects(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
+  Scene& s = r->scene;
+  r->mirrored = d->Chance(0.5);
+  const bool m = r->mirrored;
+  s.ego = Scaled(s.ego, d->Uniform(0.85, 1.15, "ego.speed_factor"), m);
+  if (m) {
+    std::swap(s.road.lanes_left, s.road.lanes_right);
+    s.road.ego_lane_center_x_m = -s.road.ego_lane_center_x_m;
+  }
+  for (SceneObject& obj : s.objects) {
+    const std::string name = "object" + std::to_string(obj.id);
+    const double size = o.object_size_fraction;
+    if (obj.kind != "pole") {
+      obj.length_m *= 1 + d->Uniform(-size, size, name + ".length_factor");
+      obj.width_m *= 1 + d->Uniform(-size, size, name + ".width_factor");
+    }
+    obj.height_m *= 1 + d->Uniform(-size, size, name + ".height_factor");
+    obj.brightness = d->Uniform(0.2, 1.0, name + ".brightness");
+    obj.colour = d->Index(8);
+    obj.start.x_m += d->Uniform(-o.object_shift_m, o.object_shift_m, name + ".shift_x_m");
+    obj.start.z_m += d->Uniform(-o.object_shift_m, o.object_shift_m, name + ".shift_z_m");
+    if (m) {
+      obj.start.x_m = -obj.start.x_m;
+      obj.start.heading_rad = -obj.start.heading_rad;
+    }
+    obj.motion = Scaled(obj.motion, 1 + d->Uniform(-o.object_speed_fraction, o.object_speed_fraction, name + ".speed_factor"), m);
+  }
+}
+
+}  // namespace
+
+void RandomizeOptions::Check() const {
+  const OptionCheck Require("randomize");
+  Require(field_edge_min_deg >= 0 && field_edge_min_deg <= field_edge_max_deg, "field_edge_min_deg",
+          field_edge_min_deg, "0 <= min <= field_edge_max_deg");
+  Require(field_edge_max_deg <= 45, "field_edge_max_deg", field_edge_max_deg, "<= 45 (mirrors with xi >= 0.75)");
+  Require(side_fisheye_tilt_min_deg >= 0 && side_fisheye_tilt_min_deg <= side_fisheye_tilt_max_deg,
+          "side_fisheye_tilt_min_deg", side_fisheye_tilt_min_deg, "0 <= min <= side_fisheye_tilt_max_deg");
+  Require(side_fisheye_tilt_max_deg <= 80, "side_fisheye_tilt_max_deg", side_fisheye_tilt_max_deg, "<= 80");
+  Require(mount_rotation_max_deg >= 0, "mount_rotation_max_deg", mount_rotation_max_deg, ">= 0");
+  Require(calibration_error_max_deg >= 0, "calibration_error_max_deg", calibration_error_max_deg, ">= 0");
+  Require(height_min_m > 0 && height_min_m <= height_max_m, "height_min_m", height_min_m, "0 < min <= height_max_m");
+  Require(principal_offset_max_px >= 0, "principal_offset_max_px", principal_offset_max_px, ">= 0");
+  Require(aspect_max_deviation >= 0 && aspect_max_deviation <= 0.2, "aspect_max_deviation", aspect_max_deviation,
+          "0..0.2");
+  Require(object_size_fraction >= 0 && object_size_fraction <= 0.5, "object_size_fraction", object_size_fraction,
+          "0..0.5");
+  Require(object_speed_fraction >= 0 && object_speed_fraction <= 0.5, "object_speed_fraction",
+          object_speed_fraction, "0..0.5");
+  Require(object_shift_m >= 0, "object_shift_m", object_shift_m, ">= 0");
+  Require(video_fraction >= 0 && video_fraction <= 1, "video_fraction", video_fraction, "0..1");
+}
+
+std::string RandomizedScene::ToJson(std::uint64_t seed) const {
+  std::ostringstream o;
+  o.precision(10);
+  o << "{\n  \"scene\": \"" << scene.name << "\",\n  \"seed\": " << seed << ",\n  \"camera_family\": \""
+    << camera_family << "\",\n  \"mirrored\": " << (mirrored ? "true" : "false")
+    << ",\n  \"video\": " << (video ? "true" : "false") << ",\n  \"draws\": {";
+  for (size_t i = 0; i < draws.size(); ++i) {
+    o << (i ? ",\n" : "\n") << "    \"" << draws[i].first << "\": " << draws[i].second;
+  }
+  o << "\n  }\n}\n";
+  return o.str();
+}
+
+RandomizedScene Randomize(const Scene& scene, std::uint64_t seed, const RandomizeOptions& options) {
+  options.Check();
+  if (scene.kind != SceneKind::kDrive) throw Error(Str(scene.name, ": only drive scenes can be randomised"));
+  if (!scene.rig.Has("left") || !scene.rig.Has("right")) {
+    throw Error(Str(scene.name, ": randomising needs a rig with cameras 'left' and 'right'"));
+  }
+  RandomizedScene r;
+  r.scene = scene;
+  // One stream per seed, the scene's name mixed in so that families differ at the same seed.
+  std::uint64_t mix = seed * 0x9E3779B97F4A7C15ull;
+  for (const char ch : scene.name) mix = (mix ^ static_cast<unsigned char>(ch)) * 0x100000001B3ull;
+  Draws d(mix, &r);
+  r.camera_family = kFamilies[d.Index(4)];
+  DrawRig(options, &r, &d);
+  DrawAppearance(options, &r, &d);
+  DrawObjects(options, &r, &d);
+  return r;
+}
+
+}  // namespace dps

@@ -1,0 +1,115 @@
+// The robustness battery's draws and a small fixed subset of its report set (docs/robustness.md):
+// randomised drives are reproducible, stay within their ranges (the field of view ends where it was
+// drawn, the calibration error is bounded), cover every camera family, and go through the whole
+// pipeline. The subset's scores are printed; they become floors once the detection targets are met
+// on the battery (they are not yet: docs/robustness.md).
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "check.h"
+#include "dps/detect/detection_io.h"
+#include "dps/eval/evaluation.h"
+#include "dps/pipeline/drive_processing.h"
+#include "dps/synth/randomize.h"
+#include "dps/synth/synth.h"
+#include "dps/synth/truth_io.h"
+#include "dps/util/error.h"
+#include "fixtures.h"
+
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+double Draw(const dps::RandomizedScene& r, const std::string& name) {
+  for (const auto& [key, value] : r.draws) {
+    if (key == name) return value;
+  }
+  return std::nan("");
+}
+
+void TestDraws() {
+  const dps::Scene scene = dps_test::SmallScene("lead_car", 320, 240);
+  const dps::RandomizeOptions o;
+  // Reproducible, and another seed draws another drive.
+  const dps::RandomizedScene a = dps::Randomize(scene, 1000), b = dps::Randomize(scene, 1000);
+  CHECK(a.ToJson(1000) == b.ToJson(1000));
+  CHECK(a.ToJson(1000) != dps::Randomize(scene, 1001).ToJson(1001));
+  std::set<std::string> families;
+  std::set<bool> mirrored;
+  for (std::uint64_t seed = 0; seed < 40; ++seed) {
+    const dps::RandomizedScene r = dps::Randomize(scene, seed);
+    families.insert(r.camera_family);
+    mirrored.insert(r.mirrored);
+    for (const dps::RigCamera& c : r.scene.rig.cameras) {
+      const dps::RigCamera& processed = r.processing_rig.Camera(c.name);
+      CHECK(dps::RotationAngleDeg(processed.vehicle_from_camera.R, c.vehicle_from_camera.R) <=
+            o.calibration_error_max_deg + 1e-9);
+      const double height = -c.vehicle_from_camera.t.y();
+      CHECK(height >= o.height_min_m && height <= o.height_max_m);
+      CHECK(c.model.width() == 320 && c.model.height() == 240);
+      if (r.camera_family == "fisheye_side") continue;
+      // Axis down: the field ends field_edge degrees above the horizon, at the image circle.
+      const double edge = Draw(r, c.name + ".field_edge_deg");
+      CHECK(edge >= o.field_edge_min_deg && edge <= o.field_edge_max_deg);
+      const dps::Pose camera_from_vehicle = c.vehicle_from_camera.Inverse();
+      const auto seen = [&](double elevation_deg) {
+        // A direction out to the side at this elevation, in the camera frame (mounting included).
+        const double e = elevation_deg * kDeg;
+        const Eigen::Vector3d dir(c.name == "left" ? -std::cos(e) : std::cos(e), -std::sin(e), 0.0);
+        Eigen::Vector2d pixel;
+        return c.model.Project(camera_from_vehicle.R * dir, &pixel);
+      };
+      // The mounting turns the axis by up to mount_rotation_max_deg: test beyond that margin.
+      CHECK(seen(edge - o.mount_rotation_max_deg - 1.0));
+      CHECK(!seen(edge + o.mount_rotation_max_deg + 1.0));
+    }
+  }
+  std::printf("40 seeds: %zu camera families, mirrored both ways: %s\n", families.size(),
+              mirrored.size() == 2 ? "yes" : "no");
+  CHECK_EQ(families.size(), size_t{4});
+  CHECK_EQ(mirrored.size(), size_t{2});
+  CHECK_THROWS_WITH((dps::Randomize(dps_test::SmallScene("calibration"), 1)), dps::Error, "drive scenes");
+  dps::RandomizeOptions bad;
+  bad.field_edge_min_deg = 50;
+  CHECK_THROWS_WITH((dps::Randomize(scene, 1, bad)), dps::Error, "field_edge_min_deg");
+}
+
+// A fixed subset of the report set at 320x240, through dps-process's path and dps-eval's scoring.
+void TestSubset() {
+  const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness");
+  struct Case {
+    const char* family;
+    std::uint64_t seed;
+  };
+  for (const Case& c : {Case{"lead_car", 1000}, Case{"overtaking", 1001}, Case{"parked_cars", 1002},
+                        Case{"empty_road", 1003}}) {
+    const dps::RandomizedScene r = dps::Randomize(dps_test::SmallScene(c.family, 320, 240), c.seed);
+    const std::string name = std::string(c.family) + "_" + std::to_string(c.seed);
+    const std::string drive = (work / "drives" / name).string();
+    dps::SynthOptions so;
+    so.processing_rig = r.processing_rig;
+    so.write_video = r.video;
+    so.write_png = !r.video;
+    dps::Synthesize(r.scene, drive, so);
+    dps::DriveOptions po;
+    po.map_video = false;
+    const dps::DriveSummary s = dps::ProcessDrive(drive, (work / "out").string(), po);
+    CHECK_EQ(s.frames, r.scene.FrameCount());
+    dps::EvaluationOptions eo;
+    eo.coverage = dps::PipelineCoverage(r.processing_rig, dps::DefaultPipelineOptions(r.processing_rig));
+    const dps::EvaluationResult e = dps::Evaluate(dps::ReadDetections(s.output_dir + "/detections.csv"),
+                                                  dps::ReadTruth(drive + "/truth.csv"), eo);
+    std::printf("%s (%s%s%s): %d objects, recall %.3f, precision %.3f, %d of %d frames with a detection\n",
+                name.c_str(), r.camera_family.c_str(), r.video ? ", video" : "", r.mirrored ? ", mirrored" : "",
+                e.overall.objects, e.overall.Recall(), e.overall.Precision(), e.frames_with_detections, e.frames);
+  }
+}
+
+}  // namespace
+
+int main() {
+  TestDraws();
+  TestSubset();
+  return dps_test::Report();
+}
