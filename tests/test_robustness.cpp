@@ -5,6 +5,7 @@
 // on the battery (they are not yet: docs/robustness.md).
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <set>
 
 #include "check.h"
@@ -75,6 +76,29 @@ void TestDraws() {
   CHECK_THROWS_WITH((dps::Randomize(scene, 1, bad)), dps::Error, "field_edge_min_deg");
 }
 
+// A scene file's randomize: block sets the ranges; a bad range is an error naming the file.
+void TestRandomizeBlock() {
+  const std::filesystem::path dir = dps_test::ScratchDir("dps_test_randomize_block");
+  const std::string rig = dps_test::kSource + "/data/rigs/omni_pair.yaml";
+  const std::string good = (dir / "good.yaml").string(), bad = (dir / "bad.yaml").string();
+  std::ofstream(good) << "%YAML:1.0\n---\nrig: " << rig
+                      << "\nrandomize: { field_edge_min_deg: 10, field_edge_max_deg: 12, video_fraction: 0 }\n";
+  std::ofstream(bad) << "%YAML:1.0\n---\nrig: " << rig << "\nrandomize: { field_edge_min_deg: 30, field_edge_max_deg: 20 }\n";
+  const dps::RandomizeOptions o = dps::ReadRandomizeOptions(good);
+  CHECK_EQ(o.field_edge_min_deg, 10.0);
+  CHECK_EQ(o.field_edge_max_deg, 12.0);
+  CHECK_EQ(o.video_fraction, 0.0);
+  CHECK_EQ(o.calibration_error_max_deg, dps::RandomizeOptions().calibration_error_max_deg);
+  for (std::uint64_t seed = 0; seed < 10; ++seed) {
+    const dps::RandomizedScene r = dps::Randomize(dps_test::SmallScene("lead_car", 320, 240), seed, o);
+    CHECK(!r.video);
+    if (r.camera_family == "fisheye_side") continue;
+    const double edge = Draw(r, "left.field_edge_deg");
+    CHECK(edge >= 10.0 && edge <= 12.0);
+  }
+  CHECK_THROWS_WITH(dps::ReadRandomizeOptions(bad), dps::Error, "bad.yaml");
+}
+
 // A fixed subset of the report set at 320x240, through dps-process's path and dps-eval's scoring.
 void TestSubset() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness");
@@ -110,6 +134,7 @@ void TestSubset() {
 
 int main() {
   TestDraws();
+  TestRandomizeBlock();
   TestSubset();
   return dps_test::Report();
 }

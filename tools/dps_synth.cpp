@@ -26,7 +26,8 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
                      calibration error, the appearance and the objects reproducibly from SEED
                      (docs/robustness.md): rig.yaml is then the rig to process with (the
                      rendering rig turned by the calibration error), rig_true.yaml the rendering
-                     rig, randomization.json every draw; drawn video replaces the PNG folders
+                     rig, randomization.json every draw; drawn video replaces the PNG folders;
+                     the scene file's randomize: block sets the ranges
   --video            also write left.avi and right.avi (MJPG)
   --no-png           do not write the PNG folders (needs --video)
   --truth-images     also write range/<camera>/ (16-bit mm) and ids/<camera>/ truth images
@@ -69,7 +70,8 @@ int main(int argc, char** argv) {
     if (args.Has("randomize")) {
       const int seed = args.Integer("randomize", 0);
       if (seed < 0) throw dps::Error("option --randomize: expected a non-negative integer");
-      const dps::RandomizedScene r = dps::Randomize(scene, static_cast<std::uint64_t>(seed));
+      const dps::RandomizedScene r = dps::Randomize(scene, static_cast<std::uint64_t>(seed),
+                                                    dps::ReadRandomizeOptions(args.positional()[0]));
       scene = r.scene;
       options.processing_rig = r.processing_rig;
       options.extra_files["randomization.json"] = r.ToJson(static_cast<std::uint64_t>(seed));

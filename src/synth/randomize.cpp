@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "dps/util/error.h"
+#include "util/yaml_fields.h"
 
 namespace dps {
 namespace {
@@ -214,6 +215,36 @@ void RandomizeOptions::Check() const {
           object_speed_fraction, "0..0.5");
   Require(object_shift_m >= 0, "object_shift_m", object_shift_m, ">= 0");
   Require(video_fraction >= 0 && video_fraction <= 1, "video_fraction", video_fraction, "0..1");
+}
+
+RandomizeOptions ReadRandomizeOptions(const std::string& scene_path) {
+  cv::FileStorage fs = internal::OpenForReading(scene_path);
+  const internal::FieldReader f(fs.root(), scene_path);
+  RandomizeOptions o;
+  if (!f.Has("randomize")) return o;
+  const internal::FieldReader r = f.Child(f.Required("randomize"), "randomize");
+  const std::pair<const char*, double*> fields[] = {
+      {"field_edge_min_deg", &o.field_edge_min_deg},
+      {"field_edge_max_deg", &o.field_edge_max_deg},
+      {"side_fisheye_tilt_min_deg", &o.side_fisheye_tilt_min_deg},
+      {"side_fisheye_tilt_max_deg", &o.side_fisheye_tilt_max_deg},
+      {"mount_rotation_max_deg", &o.mount_rotation_max_deg},
+      {"calibration_error_max_deg", &o.calibration_error_max_deg},
+      {"height_min_m", &o.height_min_m},
+      {"height_max_m", &o.height_max_m},
+      {"principal_offset_max_px", &o.principal_offset_max_px},
+      {"aspect_max_deviation", &o.aspect_max_deviation},
+      {"object_size_fraction", &o.object_size_fraction},
+      {"object_speed_fraction", &o.object_speed_fraction},
+      {"object_shift_m", &o.object_shift_m},
+      {"video_fraction", &o.video_fraction}};
+  for (const auto& [key, value] : fields) *value = r.NumberOr(key, *value);
+  try {
+    o.Check();
+  } catch (const Error& e) {
+    throw Error(Str(scene_path, ": randomize: ", e.what()));
+  }
+  return o;
 }
 
 std::string RandomizedScene::ToJson(std::uint64_t seed) const {

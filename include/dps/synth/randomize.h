@@ -60,6 +60,10 @@ struct RandomizedScene {
   std::string ToJson(std::uint64_t seed) const;
 };
 
+// The ranges of a scene file's `randomize:` block (keys as the fields above; absent keys keep the
+// defaults, no block gives the defaults). Throws dps::Error naming the file and the field.
+RandomizeOptions ReadRandomizeOptions(const std::string& scene_path);
+
 // Draws a randomised version of `scene` (a drive scene) from `seed`: the same seed and scene give
 // the same result on every machine. The scene's image size is kept.
 RandomizedScene Randomize(const Scene& scene, std::uint64_t seed, const RandomizeOptions& options = {});
