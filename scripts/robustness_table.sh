@@ -19,7 +19,7 @@ BUILD_DIR=${DPS_BUILD_DIR:-$ROOT/build}
 WORK=${1:-$ROOT/out/robustness}
 SEEDS=${SEEDS:-"1000 1001 1002 1003 1004 1005 1006 1007"}
 SIZES=${SIZES:-"640x480 320x240"}
-FAMILIES=${FAMILIES:-"lead_car overtaking parked_cars parked_left left_turn truck_far empty_road"}
+FAMILIES=${FAMILIES:-"lead_car overtaking cut_in stop_and_go parked_cars parked_left left_turn truck_far empty_road empty_turn"}
 DOC=${DOC:-$ROOT/docs/robustness.md}
 "$ROOT/scripts/build.sh" >/dev/null
 T="$BUILD_DIR/tools"
@@ -131,7 +131,7 @@ for size in sizes:
     for family in families:
         g = [r for r in group if r["family"] == family]
         failed = sum(r["failed"] for r in g)
-        if family == "empty_road":
+        if family.startswith("empty"):
             ok = [r for r in g if not r["failed"]]
             per_frame = [r["detections"] / max(1, r["frames"]) for r in ok]
             share = [r["frames_with"] / max(1, r["frames"]) for r in ok]
@@ -143,15 +143,15 @@ for size in sizes:
               f"{stats(g, 'range_error', True, False)} | {stats(g, 'track_velocity', False, False)} | "
               f"{stats(g, 'switches', False, False)} |")
     print()
-    print("By camera family (every scene but the empty road):\n")
+    print("By camera family (every scene but the empty roads):\n")
     print("| camera | drives | recall | precision | range error |")
     print("| --- | --- | --- | --- | --- |")
     for camera in ["hyperbolic", "unified", "fisheye_down", "fisheye_side"]:
-        g = [r for r in group if r["camera"] == camera and r["family"] != "empty_road"]
+        g = [r for r in group if r["camera"] == camera and not r["family"].startswith("empty")]
         if not g: continue
         print(f"| {camera} | {len(g)} | {stats(g, 'recall')} | {stats(g, 'precision')} | {stats(g, 'range_error', True, False)} |")
     print()
-    scored = [r for r in group if not r["failed"] and r["family"] != "empty_road" and r.get("recall") is not None]
+    scored = [r for r in group if not r["failed"] and not r["family"].startswith("empty") and r.get("recall") is not None]
     worst = sorted(scored, key=lambda r: min(r["recall"], r["precision"] if r["precision"] is not None else 1))[:8]
     print("Worst drives (lowest of recall and precision):\n")
     print("| family | seed | camera | video | mirrored | recall | precision |")
