@@ -13,6 +13,7 @@
 #include "dps/eval/evaluation.h"
 #include "dps/pipeline/drive_processing.h"
 #include "dps/synth/randomize.h"
+#include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
 #include "dps/synth/truth_io.h"
 #include "dps/util/error.h"
@@ -71,6 +72,15 @@ void TestDraws() {
   CHECK_EQ(families.size(), size_t{4});
   CHECK_EQ(mirrored.size(), size_t{2});
   CHECK_THROWS_WITH((dps::Randomize(dps_test::SmallScene("calibration"), 1)), dps::Error, "drive scenes");
+  // Every shipped drive scene is a battery family: it reads and randomises.
+  int drive_scenes = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dps_test::kSource + "/data/scenes")) {
+    const dps::Scene s = dps::ReadScene(e.path().string());
+    if (s.kind != dps::SceneKind::kDrive) continue;
+    ++drive_scenes;
+    CHECK(dps::Randomize(s, 1000).scene.FrameCount() == s.FrameCount());
+  }
+  CHECK(drive_scenes >= 10);
   dps::RandomizeOptions bad;
   bad.field_edge_min_deg = 50;
   CHECK_THROWS_WITH((dps::Randomize(scene, 1, bad)), dps::Error, "field_edge_min_deg");
