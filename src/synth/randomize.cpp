@@ -32,6 +32,7 @@ class Draws {
     return v;
   }
   int Index(int n) { return static_cast<int>(Next() % static_cast<std::uint64_t>(n)); }
+  void Record(const std::string& name, double value) { out_->draws.emplace_back(name, value); }
   bool Chance(double p) { return Uniform(0.0, 1.0) < p; }
   // A rotation by an angle uniform in [0, max_rad] about a uniformly drawn axis.
   Eigen::Matrix3d Rotation(double max_rad, const std::string& name) {
@@ -150,8 +151,33 @@ void DrawAppearance(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
   render.texture_scale = d->Uniform(0.6, 1.6, "render.texture_scale");
   render.exposure = d->Uniform(0.8, 1.2, "render.exposure");
   render.vignetting = d->Uniform(0.0, 0.4, "render.vignetting");
+  render.own_body_height_m = d->Uniform(0.6, 1.0, "render.own_body_height_m");
+  render.own_cabin_height_m = d->Uniform(1.35, 1.7, "render.own_cabin_height_m");
+  render.own_car_brightness = d->Uniform(0.5, 4.0, "render.own_car_brightness");
   r->scene.seed = d->Next() % 1000000;
   r->video = d->Chance(o.video_fraction);
+}
+
+// A car of the story may be another road vehicle: a van, a bus (rendered as a box body) or a
+// motorbike, with that class's size (before the size draw).
+void DrawVehicleClass(const std::string& name, SceneObject* obj, Draws* d) {
+  const double u = d->Uniform(0.0, 1.0);
+  struct Class {
+    const char* render_kind;
+    double upto, length, width, height;
+  };
+  static const Class classes[] = {{"car", 0.55, 4.5, 1.8, 1.5},
+                                  {"car", 0.75, 5.2, 2.0, 2.2},
+                                  {"truck", 0.85, 12.0, 2.5, 3.2},
+                                  {"car", 1.0, 2.1, 0.8, 1.4}};
+  int k = 0;
+  while (u >= classes[k].upto && k < 3) ++k;
+  d->Record(name + ".class", k);  // 0 car, 1 van, 2 bus, 3 motorbike
+  if (k == 0) return;
+  obj->kind = classes[k].render_kind;
+  obj->length_m = classes[k].length;
+  obj->width_m = classes[k].width;
+  obj->height_m = classes[k].height;
 }
 
 // Speeds (and yaw rates when mirrored) of a motion profile.
@@ -176,6 +202,7 @@ void DrawObjects(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
   for (SceneObject& obj : s.objects) {
     const std::string name = "object" + std::to_string(obj.id);
     const double size = o.object_size_fraction;
+    if (obj.kind == "car") DrawVehicleClass(name, &obj, d);
     if (obj.kind != "pole") {
       obj.length_m *= 1 + d->Uniform(-size, size, name + ".length_factor");
       obj.width_m *= 1 + d->Uniform(-size, size, name + ".width_factor");

@@ -205,6 +205,10 @@ Scene ReadScene(const std::string& path) {
     s.render.exposure = Positive(r, "exposure", s.render.exposure);
     s.render.vignetting = NonNegative(r, "vignetting", s.render.vignetting);
     if (s.render.vignetting > 1) r.Fail("vignetting", "expected 0..1");
+    s.render.own_body_height_m = Positive(r, "own_body_height", s.render.own_body_height_m);
+    s.render.own_cabin_height_m = Positive(r, "own_cabin_height", s.render.own_cabin_height_m);
+    if (s.render.own_cabin_height_m < s.render.own_body_height_m) r.Fail("own_cabin_height", "expected >= own_body_height");
+    s.render.own_car_brightness = Positive(r, "own_car_brightness", s.render.own_car_brightness);
   }
   s.ego = ReadMotion(f, "ego");
   if (f.Has("road")) {

@@ -10,10 +10,8 @@
 namespace dps {
 namespace {
 
-// The own car: a lower body (bonnet / boot height) over the full length and width, and a cabin,
-// so that cameras at the side mirrors see forward over the bonnet, as on a real car.
-constexpr double kOwnBodyHeightM = 0.8;
-constexpr double kOwnCabinHeightM = 1.45;
+// The own car: a lower body (bonnet / boot height, RenderOptions) over the full length and width,
+// and a cabin, so that cameras at the side mirrors see forward over the bonnet, as on a real car.
 constexpr double kOwnCabinRearFraction = -0.40;  // cabin from -0.40 L to +0.12 L along Z
 constexpr double kOwnCabinFrontFraction = 0.12;
 constexpr double kOwnCabinInsetM = 0.1;          // narrower than the body on each side
@@ -148,9 +146,9 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
   int axis = 0;
   const double hw = car.width_m / 2, hl = car.length_m / 2;
   const double t_car = std::min(
-      SlabEntry(o, d, {-hw, -kOwnBodyHeightM, -hl}, {hw, 0.0, hl}, &axis),
+      SlabEntry(o, d, {-hw, -scene_.render.own_body_height_m, -hl}, {hw, 0.0, hl}, &axis),
       SlabEntry(o, d,
-                {-hw + kOwnCabinInsetM, -kOwnCabinHeightM, kOwnCabinRearFraction * car.length_m},
+                {-hw + kOwnCabinInsetM, -scene_.render.own_cabin_height_m, kOwnCabinRearFraction * car.length_m},
                 {hw - kOwnCabinInsetM, 0.0, kOwnCabinFrontFraction * car.length_m}, &axis));
   if (t_car < best_t) {
     best_t = t_car;
@@ -242,7 +240,8 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
     }
     case kIdOwnCar: {
       const double n = Fbm(hit.point_vehicle.x() + hit.point_vehicle.y(), hit.point_vehicle.z(), 0.3, 2, seed + 5);
-      return cv::Vec3f::all(static_cast<float>(0.12 + 0.08 * n));
+      const cv::Vec3f paint = cv::Vec3f::all(static_cast<float>(0.12 + 0.08 * n));
+      return render.own_car_brightness == 1.0 ? paint : paint * static_cast<float>(render.own_car_brightness);
     }
     case kIdGround:
     case kIdPaint: {

@@ -16,7 +16,9 @@
 // - the appearance: sky and asphalt brightness, the asphalt texture's contrast and grain size,
 //   exposure, vignetting, sensor noise, blur, the texture seed, and whether the drive is written
 //   as MJPG video instead of PNG images;
-// - the objects: sizes, paint brightness and colour, positions and speeds around the scene's own;
+// - the own car as the cameras see it: bonnet and cabin height, paint;
+// - the objects: cars of the story may become vans, buses or motorbikes; sizes, paint brightness
+//   and colour, positions and speeds around the scene's own;
 //   and the whole story mirrored left to right (overtaking on either side, turns both ways).
 #pragma once
 

@@ -64,6 +64,11 @@ struct RenderOptions {
   double texture_scale = 1.0;     // factor on the asphalt texture's feature sizes, > 0
   double exposure = 1.0;          // factor on every rendered colour (before noise), > 0
   double vignetting = 0.0;        // darkening at the image corners, fraction 0..1 (cos^4-like)
+  // The own car as the cameras see it: a body (bonnet and boot) over its whole length and width,
+  // a cabin above it, and its paint.
+  double own_body_height_m = 0.8;    // > 0
+  double own_cabin_height_m = 1.45;  // >= own_body_height_m
+  double own_car_brightness = 1.0;   // factor on its dark grey, > 0
 };
 
 // Calibration-scene settings (kind == kCalibration).
