@@ -154,6 +154,12 @@ void DrawAppearance(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
   render.own_body_height_m = d->Uniform(0.6, 1.0, "render.own_body_height_m");
   render.own_cabin_height_m = d->Uniform(1.35, 1.7, "render.own_cabin_height_m");
   render.own_car_brightness = d->Uniform(0.5, 4.0, "render.own_car_brightness");
+  render.shadows = d->Chance(0.7);
+  d->Record("render.shadows", render.shadows);
+  render.marking_wear = d->Uniform(0.0, 0.5, "render.marking_wear");
+  render.clouds = d->Chance(0.5) ? d->Uniform(0.2, 0.8, "render.clouds") : 0.0;
+  render.sun_glare = d->Chance(0.3) ? d->Uniform(0.2, 0.8, "render.sun_glare") : 0.0;
+  render.verge_m = d->Chance(0.5) ? d->Uniform(0.3, 2.0, "render.verge_m") : 0.0;
   r->scene.seed = d->Next() % 1000000;
   r->video = d->Chance(o.video_fraction);
 }

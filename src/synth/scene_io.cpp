@@ -209,6 +209,15 @@ Scene ReadScene(const std::string& path) {
     s.render.own_cabin_height_m = Positive(r, "own_cabin_height", s.render.own_cabin_height_m);
     if (s.render.own_cabin_height_m < s.render.own_body_height_m) r.Fail("own_cabin_height", "expected >= own_body_height");
     s.render.own_car_brightness = Positive(r, "own_car_brightness", s.render.own_car_brightness);
+    s.render.shadows = r.IntegerOr("shadows", s.render.shadows ? 1 : 0) != 0;
+    s.render.marking_wear = NonNegative(r, "marking_wear", s.render.marking_wear);
+    s.render.clouds = NonNegative(r, "clouds", s.render.clouds);
+    s.render.sun_glare = NonNegative(r, "sun_glare", s.render.sun_glare);
+    s.render.verge_m = NonNegative(r, "verge", s.render.verge_m);
+    for (const auto& [key, value] : {std::pair{"marking_wear", s.render.marking_wear}, std::pair{"clouds", s.render.clouds},
+                                     std::pair{"sun_glare", s.render.sun_glare}}) {
+      if (value > 1) r.Fail(key, "expected 0..1");
+    }
   }
   s.ego = ReadMotion(f, "ego");
   if (f.Has("road")) {

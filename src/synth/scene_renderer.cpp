@@ -203,6 +203,10 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
       const double u = std::clamp((Eigen::Vector2d(x, z) - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
       paint = (Eigen::Vector2d(x, z) - (a + u * ab)).norm() <= l.width_m / 2;
     }
+    if (paint && scene_.render.marking_wear > 0.0) {
+      const auto wear_seed = static_cast<std::uint32_t>(scene_.seed * 2654435761u) + 53u;
+      paint = Fbm(x, z, 0.3, 2, wear_seed) >= scene_.render.marking_wear;
+    }
     if (paint) best.id = kIdPaint;
   }
   return best;
@@ -228,6 +232,61 @@ void ApplyExposure(const RenderOptions& render, cv::Mat* image) {
 
 }  // namespace
 
+bool SceneRenderer::InShadow(const FrameState& st, const Eigen::Vector3d& p, const Eigen::Vector3d& light) const {
+  // A box shades the ground at most its height x (horizontal / vertical of the light) beyond its
+  // footprint: boxes farther away are skipped without a ray test.
+  const double reach = std::hypot(light.x(), light.z()) / std::max(1e-3, -light.y());
+  const Eigen::Vector3d o = p + 1e-4 * light;
+  int axis = 0;
+  const Vehicle& car = scene_.rig.vehicle;
+  const double hw = car.width_m / 2, hl = car.length_m / 2;
+  if (std::hypot(p.x(), p.z()) <= std::hypot(hw, hl) + reach * scene_.render.own_cabin_height_m &&
+      std::isfinite(std::min(
+          SlabEntry(o, light, {-hw, -scene_.render.own_body_height_m, -hl}, {hw, 0.0, hl}, &axis),
+          SlabEntry(o, light, {-hw + kOwnCabinInsetM, -scene_.render.own_cabin_height_m, kOwnCabinRearFraction * car.length_m},
+                    {hw - kOwnCabinInsetM, 0.0, kOwnCabinFrontFraction * car.length_m}, &axis)))) {
+    return true;
+  }
+  for (const BoxInstance& b : st.boxes) {
+    const SceneObject& obj = *b.object;
+    const Eigen::Vector2d rel2(p.x() - b.centre_xz.x(), p.z() - b.centre_xz.y());
+    if (rel2.norm() > std::hypot(obj.length_m, obj.width_m) / 2 + reach * obj.height_m) continue;
+    const double c = std::cos(b.heading_rad), s = std::sin(b.heading_rad);
+    const Eigen::Vector3d rel(rel2.x(), o.y(), rel2.y());
+    const Eigen::Vector3d ol(c * rel.x() - s * rel.z(), rel.y(), s * rel.x() + c * rel.z());
+    const Eigen::Vector3d dl(c * light.x() - s * light.z(), light.y(), s * light.x() + c * light.z());
+    if (std::isfinite(SlabEntry(ol, dl, {-obj.width_m / 2, -obj.height_m, -obj.length_m / 2},
+                                {obj.width_m / 2, 0.0, obj.length_m / 2}, &axis))) {
+      return true;
+    }
+  }
+  return false;
+}
+
+bool SceneRenderer::OnVerge(double world_x) const {
+  const RoadMarkings& r = scene_.road;
+  const double left = r.ego_lane_center_x_m - (r.lanes_left + 0.5) * r.lane_width_m;
+  const double right = r.ego_lane_center_x_m + (r.lanes_right + 0.5) * r.lane_width_m;
+  return world_x < left - scene_.render.verge_m || world_x > right + scene_.render.verge_m;
+}
+
+cv::Vec3f SceneRenderer::SkyDetail(const RenderOptions& render, const Eigen::Vector3d& d, const Eigen::Vector3d& light,
+                                   float elevation, std::uint32_t seed, cv::Vec3f sky) const {
+  if (render.clouds > 0.0) {
+    // Clouds on a plane above: coordinates of the ray's crossing, noise thresholded by the cover.
+    const double up = std::max(0.05, -d.y());
+    const double cloud = Fbm(d.x() / up * 40.0, d.z() / up * 40.0, 60.0, 3, seed + 61);
+    const float c = static_cast<float>(std::clamp((cloud - (1.0 - render.clouds)) * 3.0, 0.0, 1.0)) *
+                    std::min(1.0f, 4.0f * elevation + 0.2f);
+    sky = sky * (1 - c) + cv::Vec3f(0.92f, 0.92f, 0.93f) * c;
+  }
+  if (render.sun_glare > 0.0) {
+    const double off = 1.0 - std::clamp(d.dot(light), -1.0, 1.0);  // 0 towards the sun
+    sky += cv::Vec3f::all(static_cast<float>(render.sun_glare * std::exp(-off / 0.01)));
+  }
+  return sky;
+}
+
 cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, const RayHit& hit,
                                const Eigen::Vector3d& light) const {
   const auto seed = static_cast<std::uint32_t>(scene_.seed * 2654435761u);
@@ -235,7 +294,8 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
   switch (hit.id) {
     case kIdSky: {
       const float e = static_cast<float>(std::clamp(-d.y(), 0.0, 1.0));
-      const cv::Vec3f sky = cv::Vec3f(0.86f, 0.82f, 0.76f) * (1 - e) + cv::Vec3f(0.80f, 0.58f, 0.35f) * e;
+      cv::Vec3f sky = cv::Vec3f(0.86f, 0.82f, 0.76f) * (1 - e) + cv::Vec3f(0.80f, 0.58f, 0.35f) * e;
+      if (render.clouds > 0.0 || render.sun_glare > 0.0) sky = SkyDetail(render, d, light, e, seed, sky);
       return render.sky_brightness == 1.0 ? sky : sky * static_cast<float>(render.sky_brightness);
     }
     case kIdOwnCar: {
@@ -248,7 +308,10 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
       const Eigen::Vector3d& w = hit.point_world;
       const double k = render.texture_scale;
       const double n = Fbm(w.x(), w.z(), 0.8 * k, 4, seed + 11);
-      if (hit.id == kIdPaint) return cv::Vec3f::all(static_cast<float>(0.78 + 0.12 * n));
+      if (hit.id == kIdPaint) {
+        const cv::Vec3f paint = cv::Vec3f::all(static_cast<float>(0.78 + 0.12 * n));
+        return render.shadows && InShadow(st, hit.point_vehicle, light) ? paint * 0.5f : paint;
+      }
       // Asphalt: patches at 0.8 m, and aggregate at 0.25 m and 0.06 m that correlation stereo
       // can lock on to (real asphalt is textured down to the pixel).
       const double mid = Fbm(w.x(), w.z(), 0.25 * k, 2, seed + 23);
@@ -256,7 +319,12 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
       const double c = render.ground_contrast;
       const float g = static_cast<float>(0.30 * render.ground_brightness + c * 0.14 * (n - 0.5) +
                                          c * 0.16 * (mid - 0.5) + c * 0.14 * (grain - 0.5));
-      return cv::Vec3f(g, g * 1.01f, g * 1.03f);
+      cv::Vec3f ground(g, g * 1.01f, g * 1.03f);
+      if (render.verge_m > 0.0 && scene_.road.enabled && OnVerge(w.x())) {
+        ground = cv::Vec3f(0.16f, 0.34f, 0.26f) * static_cast<float>(0.7 + 0.6 * mid + 0.3 * (grain - 0.5));
+      }
+      if (render.shadows && InShadow(st, hit.point_vehicle, light)) ground *= 0.5f;
+      return ground;
     }
     default: break;
   }

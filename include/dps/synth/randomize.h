@@ -14,8 +14,8 @@
 // - the calibration error: the rig written for processing is the rendering rig with each camera
 //   turned by a further small rotation;
 // - the appearance: sky and asphalt brightness, the asphalt texture's contrast and grain size,
-//   exposure, vignetting, sensor noise, blur, the texture seed, and whether the drive is written
-//   as MJPG video instead of PNG images;
+//   shadows, worn markings, clouds, sun glare, grass verges, exposure, vignetting, sensor noise,
+//   blur, the texture seed, and whether the drive is written as MJPG video instead of PNG images;
 // - the own car as the cameras see it: bonnet and cabin height, paint;
 // - the objects: cars of the story may become vans, buses or motorbikes; sizes, paint brightness
 //   and colour, positions and speeds around the scene's own;

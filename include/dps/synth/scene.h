@@ -69,6 +69,12 @@ struct RenderOptions {
   double own_body_height_m = 0.8;    // > 0
   double own_cabin_height_m = 1.45;  // >= own_body_height_m
   double own_car_brightness = 1.0;   // factor on its dark grey, > 0
+  // Scene detail (0 / false: none, the shipped look).
+  bool shadows = false;           // objects and the own car cast shadows from the sun on the ground
+  double marking_wear = 0.0;      // fraction of lane markings worn away, 0..1
+  double clouds = 0.0;            // cloud cover of the sky, 0..1
+  double sun_glare = 0.0;         // brightness of the halo around the sun, 0..1
+  double verge_m = 0.0;           // grass beyond the road's outer edges from this far out, m (0 = asphalt)
 };
 
 // Calibration-scene settings (kind == kCalibration).

@@ -83,6 +83,12 @@ class SceneRenderer {
   const Scene& scene() const { return scene_; }
 
  private:
+  // Scene detail: a ground point in the shadow of an object or the own car; the verge beyond the
+  // road's outer edges; clouds and the sun's halo on a sky colour.
+  bool InShadow(const FrameState& st, const Eigen::Vector3d& ground_point, const Eigen::Vector3d& light) const;
+  bool OnVerge(double world_x) const;
+  cv::Vec3f SkyDetail(const RenderOptions& render, const Eigen::Vector3d& d, const Eigen::Vector3d& light,
+                      float elevation, std::uint32_t seed, cv::Vec3f sky) const;
   struct CameraRays {
     int width = 0, height = 0;
     std::vector<Eigen::Vector3f> dirs;  // (samples + 1) per pixel; centre ray first; NaN = none
