@@ -109,6 +109,29 @@ void TestRandomizeBlock() {
   CHECK_THROWS_WITH(dps::ReadRandomizeOptions(bad), dps::Error, "bad.yaml");
 }
 
+// Drives written as lossy video (H.264, else MPEG-4 part 2) read back through dps-process's path.
+void TestLossyVideo() {
+  const std::filesystem::path work = dps_test::ScratchDir("dps_test_lossy_video");
+  dps::SynthOptions so;
+  so.frames = 5;
+  so.write_png = false;
+  so.write_video = true;
+  so.video_codec = "H264";
+  dps::Synthesize(dps_test::SmallScene("lead_car", 320, 240), (work / "d").string(), so);
+  std::ifstream in(work / "d" / "video_codec.txt");
+  std::string codec;
+  std::getline(in, codec);
+  std::printf("lossy video written as %s\n", codec.c_str());
+  CHECK(codec == "H.264" || codec == "MPEG-4 part 2");
+  CHECK(std::filesystem::exists(work / "d" / "left.mp4"));
+  dps::DriveOptions po;
+  po.map_video = false;
+  CHECK_EQ(dps::ProcessDrive((work / "d").string(), (work / "out").string(), po).frames, 5);
+  so.video_codec = "XVID";
+  CHECK_THROWS_WITH(dps::Synthesize(dps_test::SmallScene("lead_car", 320, 240), (work / "e").string(), so),
+                    dps::Error, "XVID");
+}
+
 // A fixed subset of the report set at 320x240, through dps-process's path and dps-eval's scoring.
 void TestSubset() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness");
@@ -125,6 +148,7 @@ void TestSubset() {
     so.processing_rig = r.processing_rig;
     so.write_video = r.video;
     so.write_png = !r.video;
+    if (r.video) so.video_codec = r.video_codec;
     dps::Synthesize(r.scene, drive, so);
     dps::DriveOptions po;
     po.map_video = false;
@@ -145,6 +169,7 @@ void TestSubset() {
 int main() {
   TestDraws();
   TestRandomizeBlock();
+  TestLossyVideo();
   TestSubset();
   return dps_test::Report();
 }

@@ -29,6 +29,8 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
                      rig, randomization.json every draw; drawn video replaces the PNG folders;
                      the scene file's randomize: block sets the ranges
   --video            also write left.avi and right.avi (MJPG)
+  --h264             the videos as left.mp4 and right.mp4 in H.264 (lossy, as recorded drives are;
+                     MPEG-4 part 2 where OpenCV has no H.264 encoder; video_codec.txt says which)
   --no-png           do not write the PNG folders (needs --video)
   --truth-images     also write range/<camera>/ (16-bit mm) and ids/<camera>/ truth images
   --force            replace DIR if it exists
@@ -41,7 +43,7 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-synth", [&] {
     const dps_cli::Args args(argc, argv, {"out", "size", "seed", "frames", "randomize"},
-                             {"video", "no-png", "truth-images", "force", "quiet"});
+                             {"video", "h264", "no-png", "truth-images", "force", "quiet"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -65,7 +67,8 @@ int main(int argc, char** argv) {
     dps::SynthOptions options;
     options.frames = args.Integer("frames", -1);
     if (args.Has("frames") && options.frames < 1) throw dps::Error("option --frames: expected >= 1");
-    options.write_video = args.Has("video");
+    options.write_video = args.Has("video") || args.Has("h264");
+    if (args.Has("h264")) options.video_codec = "H264";
     options.write_png = !args.Has("no-png");
     if (args.Has("randomize")) {
       const int seed = args.Integer("randomize", 0);
@@ -78,6 +81,7 @@ int main(int argc, char** argv) {
       if (r.video) {
         options.write_video = true;
         options.write_png = false;
+        options.video_codec = r.video_codec;
       }
     }
     options.write_truth_images = args.Has("truth-images");

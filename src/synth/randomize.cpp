@@ -162,6 +162,7 @@ void DrawAppearance(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
   render.verge_m = d->Chance(0.5) ? d->Uniform(0.3, 2.0, "render.verge_m") : 0.0;
   r->scene.seed = d->Next() % 1000000;
   r->video = d->Chance(o.video_fraction);
+  r->video_codec = r->video ? (d->Chance(0.5) ? "H264" : "MJPG") : "";
 }
 
 // A car of the story may be another road vehicle: a van, a bus (rendered as a box body) or a
@@ -285,7 +286,8 @@ std::string RandomizedScene::ToJson(std::uint64_t seed) const {
   o.precision(10);
   o << "{\n  \"scene\": \"" << scene.name << "\",\n  \"seed\": " << seed << ",\n  \"camera_family\": \""
     << camera_family << "\",\n  \"mirrored\": " << (mirrored ? "true" : "false")
-    << ",\n  \"video\": " << (video ? "true" : "false") << ",\n  \"draws\": {";
+    << ",\n  \"video\": " << (video ? "true" : "false") << ",\n  \"video_codec\": \"" << video_codec
+    << "\",\n  \"draws\": {";
   for (size_t i = 0; i < draws.size(); ++i) {
     o << (i ? ",\n" : "\n") << "    \"" << draws[i].first << "\": " << draws[i].second;
   }

@@ -88,11 +88,7 @@ class CameraOutputs {
         fs::create_directories(tmp / "range" / c.name);
         fs::create_directories(tmp / "ids" / c.name);
       }
-      if (!options.write_video) continue;
-      video_tmp_.push_back((tmp / ("." + c.name + ".avi.tmp.avi")).string());
-      videos_.push_back(std::make_unique<cv::VideoWriter>(video_tmp_.back(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
-                                                          fps, cv::Size(c.model.width(), c.model.height())));
-      if (!videos_.back()->isOpened()) throw Error(Str(out_dir, ": cannot open a video writer (MJPG)"));
+      if (options.write_video) OpenVideo(c, fps, out_dir);
     }
   }
 
@@ -105,18 +101,46 @@ class CameraOutputs {
     }
   }
 
-  // The videos under their final names.
+  // The videos under their final names, and the codec they were written with (video_codec.txt).
   void Close() {
     for (size_t c = 0; c < videos_.size(); ++c) {
       videos_[c]->release();
-      RenameReplacing(video_tmp_[c], (tmp_ / (names_[c] + ".avi")).string());
+      RenameReplacing(video_tmp_[c], (tmp_ / (names_[c] + video_ext_)).string());
     }
+    if (!videos_.empty()) WriteFileAtomically((tmp_ / "video_codec.txt").string(), codec_ + "\n");
   }
 
  private:
+  // MJPG in AVI, or H.264 in MP4 (MPEG-4 part 2 where OpenCV has no H.264 encoder).
+  void OpenVideo(const RigCamera& c, double fps, const std::string& out_dir) {
+    struct Format {
+      const char* codec;
+      const char* ext;
+      int fourcc;
+    };
+    const std::vector<Format> formats =
+        options_.video_codec == "H264"
+            ? std::vector<Format>{{"H.264", ".mp4", cv::VideoWriter::fourcc('a', 'v', 'c', '1')},
+                                  {"MPEG-4 part 2", ".mp4", cv::VideoWriter::fourcc('m', 'p', '4', 'v')}}
+            : std::vector<Format>{{"MJPG", ".avi", cv::VideoWriter::fourcc('M', 'J', 'P', 'G')}};
+    for (const Format& f : formats) {
+      if (!codec_.empty() && codec_ != f.codec) continue;  // both cameras with the same codec
+      const std::string tmp = (tmp_ / ("." + c.name + ".tmp" + f.ext)).string();
+      auto writer = std::make_unique<cv::VideoWriter>(tmp, f.fourcc, fps, cv::Size(c.model.width(), c.model.height()));
+      if (!writer->isOpened()) continue;
+      codec_ = f.codec;
+      video_ext_ = f.ext;
+      video_tmp_.push_back(tmp);
+      videos_.push_back(std::move(writer));
+      return;
+    }
+    throw Error(Str(out_dir, ": cannot open a video writer (", options_.video_codec, ")"));
+  }
+
   fs::path tmp_;
   const SynthOptions& options_;
   std::vector<std::string> names_, video_tmp_;
+  std::string codec_, video_ext_;
   std::vector<std::unique_ptr<cv::VideoWriter>> videos_;
 };
 
@@ -213,6 +237,9 @@ std::vector<Mark> SampleMarks(const SceneRenderer& renderer, const FrameState& s
 void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOptions& options) {
   if (!options.write_png && !options.write_video) {
     throw Error("nothing to write: choose PNG images and/or video");
+  }
+  if (options.video_codec != "MJPG" && options.video_codec != "H264") {
+    throw Error("video codec '" + options.video_codec + "': expected MJPG or H264");
   }
   const fs::path out(out_dir);
   if (fs::exists(out) && !options.overwrite) {

@@ -15,7 +15,8 @@
 //   turned by a further small rotation;
 // - the appearance: sky and asphalt brightness, the asphalt texture's contrast and grain size,
 //   shadows, worn markings, clouds, sun glare, grass verges, exposure, vignetting, sensor noise,
-//   blur, the texture seed, and whether the drive is written as MJPG video instead of PNG images;
+//   blur, the texture seed, and whether the drive is written as video (MJPG or H.264) instead of
+//   PNG images;
 // - the own car as the cameras see it: bonnet and cabin height, paint;
 // - the objects: cars of the story may become vans, buses or motorbikes; sizes, paint brightness
 //   and colour, positions and speeds around the scene's own;
@@ -45,7 +46,7 @@ struct RandomizeOptions {
   double object_size_fraction = 0.15;       // objects' sizes scaled by 1 +- this, 0..0.5
   double object_speed_fraction = 0.2;       // objects' speeds scaled by 1 +- this, 0..0.5
   double object_shift_m = 0.5;              // objects moved across and along by up to this, >= 0
-  double video_fraction = 0.5;              // share of drives written as MJPG video, 0..1
+  double video_fraction = 0.5;              // share of drives written as video (half MJPG, half H.264), 0..1
 
   // Throws dps::Error naming the field, its value and the violated constraint.
   void Check() const;
@@ -56,7 +57,8 @@ struct RandomizedScene {
   Rig processing_rig;          // what rig.yaml holds: the true rig with a calibration error
   std::string camera_family;   // "hyperbolic", "unified", "fisheye_down", "fisheye_side"
   bool mirrored = false;       // the story mirrored left to right
-  bool video = false;          // written as MJPG video
+  bool video = false;          // written as video instead of PNG images
+  std::string video_codec;     // then "MJPG" or "H264" (SynthOptions::video_codec)
   std::vector<std::pair<std::string, double>> draws;  // every drawn number, by name
   // The draws as a JSON object (family, seed, mirrored, video, draws).
   std::string ToJson(std::uint64_t seed) const;

@@ -39,7 +39,10 @@ Rig PerturbedRig(const Scene& scene);
 
 struct SynthOptions {
   bool write_png = true;          // left/, right/ image folders
-  bool write_video = false;       // left.avi, right.avi (MJPG)
+  bool write_video = false;       // left.avi, right.avi (MJPG), or left.mp4, right.mp4 (H264)
+  // "MJPG", or "H264" (lossy, as recorded drives are; MPEG-4 part 2 where OpenCV has no H.264
+  // encoder). The codec used is written to video_codec.txt.
+  std::string video_codec = "MJPG";
   bool write_truth_images = false;// range/ and ids/ folders
   int frames = -1;                // > 0: render only this many frames
   bool overwrite = false;         // replace an existing output folder
