@@ -13,6 +13,9 @@
 #   SIZES="320x240"     the image sizes (default "640x480 320x240")
 #   FAMILIES="lead_car" the scenes (default every shipped drive scene)
 #   DOC=path            where the table goes (default docs/robustness.md; "-" = stdout)
+#   CALIBRATE_SIZES="320x240"  sizes whose drives are also processed with the rig dps-calibrate
+#                       estimates from marks of a calibration scene rendered with the drive's own
+#                       rig (default 320x240; "" = none)
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD_DIR=${DPS_BUILD_DIR:-$ROOT/build}
@@ -21,6 +24,7 @@ SEEDS=${SEEDS:-"1000 1001 1002 1003 1004 1005 1006 1007"}
 SIZES=${SIZES:-"640x480 320x240"}
 FAMILIES=${FAMILIES:-"lead_car overtaking cut_in stop_and_go parked_cars parked_left left_turn truck_far empty_road empty_turn"}
 DOC=${DOC:-$ROOT/docs/robustness.md}
+CALIBRATE_SIZES=${CALIBRATE_SIZES-320x240}
 "$ROOT/scripts/build.sh" >/dev/null
 T="$BUILD_DIR/tools"
 mkdir -p "$WORK"
@@ -43,9 +47,35 @@ for size in $SIZES; do
     done
     echo "robustness_table.sh: $size $family rendered ($(( $(date +%s) - start )) s)" >&2
   done
+  # Rig variants: the drive processed with its rendering rig (no calibration error), and with the
+  # rig dps-calibrate estimates from marks of the parking-lot scene seen by the drive's own rig,
+  # starting from the rig the drive came with.
+  calibrated=()
+  if [[ " $CALIBRATE_SIZES " == *" $size "* ]]; then
+    for drive in "${drives[@]}"; do
+      name=$(basename "$drive")
+      cal="$WORK/$size/calibration/$name" cdrive="$WORK/$size/drives/${name}_calibrated"
+      tdrive="$WORK/$size/drives/${name}_true"
+      rm -rf "$cdrive" "$tdrive"
+      mkdir -p "$tdrive"
+      for f in "$drive"/*; do [ "$(basename "$f")" = rig.yaml ] || ln -s "$f" "$tdrive/"; done
+      cp "$drive/rig_true.yaml" "$tdrive/rig.yaml"
+      calibrated+=("$tdrive")
+      "$T/dps-synth" "$ROOT/data/scenes/calibration.yaml" --rig "$drive/rig_true.yaml" \
+        --processing-rig "$drive/rig.yaml" --frames 1 --out "$cal" --force --quiet
+      if "$T/dps-calibrate" --rig "$drive/rig.yaml" --marks "$cal/marks.csv" --out "$cal/rig_calibrated.yaml" \
+           > "$cal/report.txt" 2>&1; then
+        mkdir -p "$cdrive"
+        for f in "$drive"/*; do [ "$(basename "$f")" = rig.yaml ] || ln -s "$f" "$cdrive/"; done
+        cp "$cal/rig_calibrated.yaml" "$cdrive/rig.yaml"
+        calibrated+=("$cdrive")
+      fi
+    done
+  fi
   # A drive that fails to process is reported by dps-process and scored as nothing detected.
-  "$T/dps-process" "${drives[@]}" --out "$WORK/$size/out" --force --quiet --no-video --jobs 2 || true
-  for drive in "${drives[@]}"; do
+  "$T/dps-process" "${drives[@]}" ${calibrated[@]+"${calibrated[@]}"} --out "$WORK/$size/out" --force --quiet \
+    --no-video --jobs 2 || true
+  for drive in "${drives[@]}" ${calibrated[@]+"${calibrated[@]}"}; do
     name=$(basename "$drive")
     out="$WORK/$size/out/$name"
     if [ -f "$out/detections.csv" ]; then
@@ -59,9 +89,10 @@ for size in $SIZES; do
 done
 target=$DOC
 [ "$DOC" = "-" ] && target=/dev/stdout
-python3 - "$WORK" "$SIZES" "$FAMILIES" "$SEEDS" > "$target" <<'PY'
+python3 - "$WORK" "$SIZES" "$FAMILIES" "$SEEDS" "$CALIBRATE_SIZES" > "$target" <<'PY'
 import json, os, sys
 work, sizes, families, seeds = sys.argv[1], sys.argv[2].split(), sys.argv[3].split(), sys.argv[4].split()
+calibrate_sizes = sys.argv[5].split()
 
 def q(values, p):
     v = sorted(x for x in values if x is not None)
@@ -125,6 +156,12 @@ print("then `dps-process d --out o` and `dps-eval` as in the script.\n")
 print("Each cell: median / 10th percentile / worst over the drives (for range and velocity errors the")
 print("90th percentile and the largest). Targets (next issue): recall and precision ≥ 0.95, range error")
 print("≤ 5 %, no detection on empty roads.\n")
+def scores(size, name):
+    path = f"{work}/{size}/{name}.json"
+    if not os.path.exists(path): return None
+    o = json.load(open(path))["detections"]["overall"]
+    return (o["recall"] if o["objects"] else None, o["precision"] if o["detections"] else None)
+
 for size in sizes:
     group = [r for r in rows if r["size"] == size]
     print(f"## {size}\n")
@@ -161,6 +198,24 @@ for size in sizes:
     for r in worst:
         print(f"| {r['family']} | {r['seed']} | {r['camera']} | {r['images']} | "
               f"{'yes' if r['mirrored'] else 'no'} | {fmt(r['recall'])} | {fmt(r['precision'])} |")
+    if size in calibrate_sizes:
+        print("\nThe same drives processed with the rendering rig (no calibration error) and with the rig")
+        print("dps-calibrate estimates from marks of the parking-lot scene seen by the drive's own rig")
+        print("(starting from the rig with the drawn error); medians over the family's drives:\n")
+        print("| family | recall: drawn error / true rig / dps-calibrate | precision: drawn error / true rig / dps-calibrate | calibrations failed |")
+        print("| --- | --- | --- | --- |")
+        for family in families:
+            if family.startswith("empty"): continue
+            cols = {"": [], "_true": [], "_calibrated": []}
+            cal_failed = 0
+            for seed in seeds:
+                for suffix in cols:
+                    sc = scores(size, f"{family}_{seed}{suffix}")
+                    if sc is None and suffix == "_calibrated": cal_failed += 1
+                    cols[suffix].append(sc)
+            med = lambda k, i: fmt(q([x[i] for x in cols[k] if x is not None], 0.5))
+            print(f"| {family} | {med('', 0)} / {med('_true', 0)} / {med('_calibrated', 0)} | "
+                  f"{med('', 1)} / {med('_true', 1)} / {med('_calibrated', 1)} | {cal_failed} |")
     failed = [r for r in group if r["failed"]]
     if failed:
         print("\nDrives dps-process could not process: " + ", ".join(f"{r['family']} {r['seed']}" for r in failed))

@@ -37,6 +37,21 @@ if(NOT EXISTS "${WORK}/calibrated.yaml")
   message(FATAL_ERROR "dps-calibrate wrote no ${WORK}/calibrated.yaml")
 endif()
 
+# A randomised drive, and the parking lot seen by its rendering rig, calibrated from its rig.yaml.
+expect(0 "wrote" "${TOOLS}/dps-synth" "${SOURCE}/data/scenes/lead_car.yaml" --randomize 1000 --size 320x240
+       --frames 3 --out "${WORK}/random")
+foreach(f rig.yaml rig_true.yaml randomization.json truth.csv)
+  if(NOT EXISTS "${WORK}/random/${f}")
+    message(FATAL_ERROR "dps-synth --randomize wrote no ${f}")
+  endif()
+endforeach()
+expect(0 "wrote" "${TOOLS}/dps-synth" "${SOURCE}/data/scenes/calibration.yaml" --rig "${WORK}/random/rig_true.yaml"
+       --processing-rig "${WORK}/random/rig.yaml" --frames 1 --out "${WORK}/random_calib")
+expect(0 "rotation change from nominal" "${TOOLS}/dps-calibrate" --rig "${WORK}/random/rig.yaml"
+       --marks "${WORK}/random_calib/marks.csv" --out "${WORK}/random_calibrated.yaml")
+expect(nonzero "expected a non-negative integer" "${TOOLS}/dps-synth" "${SOURCE}/data/scenes/lead_car.yaml"
+       --randomize -3 --out "${WORK}/random_bad")
+
 # Automatic marks from the rendered images: marks file, drawings and a calibrated rig.
 expect(0 "painted lines found" "${TOOLS}/dps-calibrate" --rig "${WORK}/calib/rig.yaml"
        --images "left=${WORK}/calib/left/000000.png,right=${WORK}/calib/right/000000.png"

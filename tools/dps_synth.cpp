@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli.h"
+#include "dps/camera/rig_io.h"
 #include "dps/synth/randomize.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
@@ -22,6 +23,12 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
   --size WxH         image size, e.g. 320x240 (the rig's cameras are rescaled)
   --seed N           random seed of textures, noise and calibration perturbations
   --frames N         render only the first N frames
+  --rig FILE         render with this rig instead of the scene's (same image sizes as the scene)
+  --processing-rig FILE
+                     write this rig as rig.yaml and the rendering rig as rig_true.yaml (a drive
+                     processed with a calibration error; for a calibration scene the nominal rig
+                     to calibrate from, with no drawn perturbation): e.g. a randomised drive's
+                     rig_true.yaml and rig.yaml, to test dps-calibrate on its rig
   --randomize SEED   draw the camera family and model, the field of view, the mounting, a
                      calibration error, the appearance and the objects reproducibly from SEED
                      (docs/robustness.md): rig.yaml is then the rig to process with (the
@@ -42,7 +49,7 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
 
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-synth", [&] {
-    const dps_cli::Args args(argc, argv, {"out", "size", "seed", "frames", "randomize"},
+    const dps_cli::Args args(argc, argv, {"out", "size", "seed", "frames", "randomize", "rig", "processing-rig"},
                              {"video", "h264", "no-png", "truth-images", "force", "quiet"});
     if (args.help()) {
       std::cout << kUsage;
@@ -51,6 +58,7 @@ int main(int argc, char** argv) {
     if (args.positional().size() != 1) throw dps::Error("expected one scene file (see --help)");
     if (!args.Has("out")) throw dps::Error("missing --out DIR (see --help)");
     dps::Scene scene = dps::ReadScene(args.positional()[0]);
+    if (args.Has("rig")) scene.rig = dps::ReadRig(args.Get("rig"));
     if (args.Has("size")) {
       int w = 0, h = 0;
       char x = 0;
@@ -70,6 +78,7 @@ int main(int argc, char** argv) {
     options.write_video = args.Has("video") || args.Has("h264");
     if (args.Has("h264")) options.video_codec = "H264";
     options.write_png = !args.Has("no-png");
+    if (args.Has("processing-rig")) options.processing_rig = dps::ReadRig(args.Get("processing-rig"));
     if (args.Has("randomize")) {
       const int seed = args.Integer("randomize", 0);
       if (seed < 0) throw dps::Error("option --randomize: expected a non-negative integer");

@@ -248,7 +248,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
   const bool calibration = scene_in.kind == SceneKind::kCalibration;
   // The rig that renders: for a calibration scene the perturbed "true" rig.
   Scene scene = scene_in;
-  if (calibration) scene.rig = PerturbedRig(scene_in);
+  if (calibration && !options.processing_rig) scene.rig = PerturbedRig(scene_in);
   const int frames = options.frames > 0 ? options.frames : scene.FrameCount();
   if (out.has_parent_path() && !out.parent_path().empty()) fs::create_directories(out.parent_path());
   const fs::path tmp = out.parent_path() / Str(".", out.filename().string(), ".tmp-", ::getpid());

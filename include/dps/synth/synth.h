@@ -47,7 +47,8 @@ struct SynthOptions {
   int frames = -1;                // > 0: render only this many frames
   bool overwrite = false;         // replace an existing output folder
   // A drive processed with another rig than the one that renders (a calibration error): that rig
-  // is written as rig.yaml and the rendering rig as rig_true.yaml. Unset: rig.yaml renders.
+  // is written as rig.yaml and the rendering rig as rig_true.yaml. Unset: rig.yaml renders. For a
+  // calibration scene it is the nominal rig and the scene's own rig renders (no drawn perturbation).
   std::optional<Rig> processing_rig;
   // More files written into the folder with it (name -> content), e.g. randomization.json.
   std::map<std::string, std::string> extra_files;
