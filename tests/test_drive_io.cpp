@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "check.h"
@@ -120,6 +121,48 @@ void TestComma2k19() {
   CHECK_NEAR(displacement / ins_displacement, 1.0, kDisplacementTolFraction);
 }
 
+void CheckEstimatedMasks(const dps::DriveSummary& s, const fs::path& drive, const fs::path& out) {
+  const dps::Rig rig = dps::ReadRig((drive / "rig.yaml").string());
+  for (const char* name : {"left", "right"}) {
+    CHECK_EQ(s.masks.at(name).source, std::string("estimated"));
+    const cv::Mat mask = cv::imread((out / "masks" / (std::string(name) + ".png")).string(), cv::IMREAD_GRAYSCALE);
+    CHECK(!mask.empty());
+    if (mask.empty()) continue;
+    const dps::CameraModel& m = rig.Camera(name).model;
+    const double margin = std::ceil(dps::FieldMaskOptions().edge_margin_fraction * m.width()) + 1.5;
+    int wrong = 0;
+    for (int y = 0; y < mask.rows; ++y) {
+      for (int x = 0; x < mask.cols; ++x) {
+        const double r = std::hypot(x - m.K()(0, 2), y - m.K()(1, 2));
+        if (r < m.rim_radius_px() - margin) wrong += mask.at<std::uint8_t>(y, x) == 0;
+        if (r > m.rim_radius_px() + 1.0) wrong += mask.at<std::uint8_t>(y, x) != 0;
+      }
+    }
+    CHECK_EQ(wrong, 0);
+    CHECK_NEAR(s.masks.at(name).valid_fraction, cv::countNonZero(mask) / static_cast<double>(mask.total()), 1e-9);
+  }
+  CHECK(s.ToJson().find("\"masks\": {\"left\": {\"source\": \"estimated\"") != std::string::npos);
+}
+
+// A mask placed in the drive is the one used (and written back).
+void CheckDriveMask(const fs::path& drive, const fs::path& out_root, const dps::DriveOptions& o) {
+  const dps::Rig rig = dps::ReadRig((drive / "rig.yaml").string());
+  const dps::CameraModel& m = rig.Camera("left").model;
+  cv::Mat mask(m.height(), m.width(), CV_8U, cv::Scalar(255));
+  mask.rowRange(0, m.height() / 3).setTo(0);
+  fs::create_directories(drive / "masks");
+  cv::imwrite((drive / "masks" / "left.png").string(), mask);
+  const dps::DriveSummary s = dps::ProcessDrive(drive.string(), out_root.string(), o);
+  CHECK_EQ(s.masks.at("left").source, std::string("drive"));
+  CHECK_EQ(s.masks.at("right").source, std::string("estimated"));
+  const cv::Mat used = cv::imread((out_root / drive.filename() / "masks" / "left.png").string(), cv::IMREAD_GRAYSCALE);
+  CHECK(!used.empty() && cv::countNonZero(used.rowRange(0, m.height() / 3)) == 0);
+  cv::imwrite((drive / "masks" / "left.png").string(), cv::Mat(8, 8, CV_8U, cv::Scalar(255)));
+  CHECK_THROWS_WITH(dps::ProcessDrive(drive.string(), (out_root / "bad").string(), o), dps::Error,
+                    "left.png: the mask is 8x8");
+  fs::remove_all(drive / "masks");
+}
+
 void TestProcessDrive() {
   dps::Scene scene = dps_test::SmallScene("lead_car", 320, 240);
   dps::SynthOptions so;
@@ -150,11 +193,15 @@ void TestProcessDrive() {
     CHECK(!s.warnings.empty());
     CHECK(s.map_video.empty());
   }
+  // The masks used: estimated from the images (the rig names none), written for the user; the
+  // renderer's rim is where the estimate puts the field's end, within the edge margin.
+  CheckEstimatedMasks(s, kTmp / "drives" / "lead", kTmp / "out" / "lead");
   const std::vector<dps::Detection> d = dps::ReadDetections((kTmp / "out" / "lead" / "detections.csv").string());
   CHECK_EQ(static_cast<int>(d.size()), s.detections);
   for (const auto& e : fs::directory_iterator(kTmp / "out")) {
     CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
   }
+  CheckDriveMask(kTmp / "drives" / "lead", kTmp / "out_masked", o);
   // Left and right of different lengths: an error naming both, no output left behind.
   fs::remove(kTmp / "drives" / "lead" / "right" / "000005.png");
   CHECK_THROWS_WITH(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out2").string(), o), dps::Error,

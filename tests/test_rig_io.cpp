@@ -121,7 +121,7 @@ void TestWriteReadRoundTrip() {
   dps::Pose pose;
   pose.R = dps::AxisAngle({0.3, -0.2, 0.9}, 1.2345678901234);
   pose.t = {0.1 / 3.0, -1.0 / 7.0, 2.0 / 3.0};
-  rig.cameras.push_back({"rear", dps::CameraModel::Unified(800, 600, K, 0.912345678901), pose});
+  rig.cameras.push_back({"rear", dps::CameraModel::Unified(800, 600, K, 0.912345678901), pose, cv::Mat(), ""});
   rig.vehicle.width_m = 1.95;
   const std::string path = (kTmp / "written.yaml").string();
   dps::WriteRig(rig, path);

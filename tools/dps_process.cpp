@@ -15,7 +15,9 @@ const char* kUsage = R"(usage: dps-process DRIVE_DIR... --out OUT_DIR [options]
 Processes recorded drives (DESIGN.md §3.2: rig.yaml, left/ and right/ images or left.<ext> and
 right.<ext> videos, can.csv, optional frames.csv) into OUT_DIR/<drive folder name>/:
 detections.csv, tracks.csv, map.mp4 (the surround map video, H.264 or MPEG-4; map.avi with MJPG,
-or map/ PNGs, when OpenCV has no such encoder) and summary.json.
+or map/ PNGs, when OpenCV has no such encoder), summary.json and masks/<camera>.png (the pixels
+each camera was taken to see the world with: from the drive's masks/, rig.yaml's `mask:`, or
+estimated from the drive's first seconds; correct one and put it into the drive's masks/).
 Outputs appear only when complete; drives already complete are skipped (--force redoes them).
 One bad drive is reported and the others still run; the exit status is the number that failed.
 
@@ -29,6 +31,8 @@ One bad drive is reported and the others still run; the exit status is the numbe
                         disparity, column histogram, obstacles) and diagnostics_middle.png
   --no-video            no map video
   --truncate            left and right differ in length: use the shorter
+  --no-mask-estimate    cameras without a mask: the model's field alone (no estimate from the images)
+  --mask-seconds S      estimate masks from the first S seconds (default 2)
   --image-fps F         frame rate of image folders without frames.csv (default 30)
   --speed-column NAME   CAN column with the speed (default speed)
   --speed-scale S       to m/s, e.g. 0.2777778 for km/h (default 1)
@@ -79,8 +83,8 @@ int main(int argc, char** argv) {
   return dps_cli::Run("dps-process", [&] {
     const dps_cli::Args args(argc, argv,
                              {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
-                              "yaw-scale", "time-column", "yaw-file"},
-                             {"force", "map-png", "no-video", "truncate", "quiet", "diagnostics"});
+                              "yaw-scale", "time-column", "yaw-file", "mask-seconds"},
+                             {"force", "map-png", "no-video", "truncate", "quiet", "diagnostics", "no-mask-estimate"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -102,6 +106,9 @@ int main(int argc, char** argv) {
     options.map_png = args.Has("map-png");
     options.diagnostics = args.Has("diagnostics");
     options.truncate = args.Has("truncate");
+    options.estimate_masks = !args.Has("no-mask-estimate");
+    options.mask_estimate_s = args.Number("mask-seconds", 2.0);
+    if (!(options.mask_estimate_s > 0)) throw dps::Error("option --mask-seconds: expected > 0");
     options.image_fps = args.Number("image-fps", 30.0);
     if (!(options.image_fps > 0)) throw dps::Error("option --image-fps: expected > 0");
     options.can.time_column = args.Get("time-column", "t");

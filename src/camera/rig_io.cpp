@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "dps/camera/valid_mask.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
 #include "util/yaml_fields.h"
@@ -91,7 +92,15 @@ std::string FirstPresent(const FieldReader& f, std::initializer_list<const char*
 
 Rig ReadRig(const std::string& path) {
   cv::FileStorage fs = OpenForReading(path);
-  return ParseRig(fs.root(), path);
+  Rig rig = ParseRig(fs.root(), path);
+  // Masks named by the file, relative to its folder.
+  for (RigCamera& c : rig.cameras) {
+    if (c.mask_file.empty()) continue;
+    const std::filesystem::path file(c.mask_file);
+    const std::string at = file.is_absolute() ? file.string() : (std::filesystem::path(path).parent_path() / file).string();
+    c.mask = ReadCameraMask(at, c.model);
+  }
+  return rig;
 }
 
 Rig ParseRig(const cv::FileNode& root, const std::string& path) {
@@ -121,7 +130,9 @@ Rig ParseRig(const cv::FileNode& root, const std::string& path) {
     pose.t = f.Matrix("t", 3, 1);
     const std::string problem = RotationProblem(pose.R, 1e-6);
     if (!problem.empty()) f.Fail("R", problem);
-    rig.cameras.push_back(RigCamera{name, std::move(model), pose});
+    RigCamera camera{name, std::move(model), pose, cv::Mat(), std::string()};
+    if (f.Has("mask")) camera.mask_file = f.Text("mask");
+    rig.cameras.push_back(std::move(camera));
     ++index;
   }
   return rig;
@@ -148,6 +159,7 @@ std::string RigToYaml(const Rig& rig) {
         break;
     }
     if (m.rim_radius_px() > 0.0) fs << "rim_radius_px" << m.rim_radius_px();
+    if (!c.mask_file.empty()) fs << "mask" << c.mask_file;
     WriteMatrix(fs, "R", c.vehicle_from_camera.R);
     WriteMatrix(fs, "t", c.vehicle_from_camera.t);
     fs << "}";

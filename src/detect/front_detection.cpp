@@ -128,7 +128,7 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
     for (int i = range.start; i < range.end; ++i) {
       cv::Mat& view = i == 0 ? r.left_view : r.right_view;
       (i == 0 ? *left_ : *right_).Render(GreyImage(i == 0 ? left_omni : right_omni), view);
-      matcher.Prepare(view, i == 0 ? &left_prepared_ : &right_prepared_);
+      matcher.Prepare(view, i == 0 ? &left_prepared_ : &right_prepared_, (i == 0 ? left_ : right_)->mask());
     }
   });
   // Drift: measure the rows' misalignment now and then, and rebuild the right view to cancel it.
@@ -144,7 +144,7 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
       by_right_.view = right_.get();
       PrepareReferences();
       right_->Render(GreyImage(right_omni), r.right_view);
-      matcher.Prepare(r.right_view, &right_prepared_);
+      matcher.Prepare(r.right_view, &right_prepared_, right_->mask());
     }
   }
   r.vertical_offset_px = vertical_offset_px_;

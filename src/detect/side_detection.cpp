@@ -233,6 +233,9 @@ const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view
   ViewGeometry g;
   g.ignore = OwnCarMask(view, vehicle_, options_.own_car_height_m);
   cv::bitwise_or(g.ignore, view.mask() == 0, g.ignore);
+  // Matched as prepared: mirrored for the left side.
+  g.valid = view.mask().clone();
+  if (side_ == Side::kLeft) cv::flip(g.valid, g.valid, 1);
   g.inverse_depth = RoadInverseDepth(view);
   return geometry_.emplace(key, std::move(g)).first->second;
 }
@@ -278,20 +281,22 @@ bool SideDetector::MatchPair(const cv::Mat& previous_omni, const cv::Mat& curren
   r->reference_view = current;
   r->other_view = previous;
   const ViewSpec& spec = current_view.spec();
+  // (The previous view's validity first: looking up a geometry may drop the others.)
+  const cv::Mat previous_valid = reuse ? cv::Mat() : Geometry(previous_view, previous_key).valid;
   m->geometry = &Geometry(current_view, current_key);
   // Both views prefiltered as matched (mirrored for the left side); the current one is kept for
   // the next call.
-  const auto prepare = [&](const cv::Mat& view, SadStereoMatcher::PreparedView* prepared) {
+  const auto prepare = [&](const cv::Mat& view, const cv::Mat& valid, SadStereoMatcher::PreparedView* prepared) {
     if (side_ == Side::kLeft) {
       cv::Mat mirrored;
       cv::flip(view, mirrored, 1);
-      matcher_->Prepare(mirrored, prepared);
+      matcher_->Prepare(mirrored, prepared, valid);
     } else {
-      matcher_->Prepare(view, prepared);
+      matcher_->Prepare(view, prepared, valid);
     }
   };
-  if (!reuse) prepare(previous, &last_prepared_);
-  prepare(current, &prepared_);
+  if (!reuse) prepare(previous, previous_valid, &last_prepared_);
+  prepare(current, m->geometry->valid, &prepared_);
   r->disparity = matcher_->Compute(prepared_, last_prepared_);
   if (side_ == Side::kLeft) cv::flip(r->disparity, r->disparity, 1);
   const auto [matched_first, matched_last] = SideMatchedColumns(side_, spec.width, options_.stereo);

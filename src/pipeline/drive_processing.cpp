@@ -47,7 +47,14 @@ std::string DriveSummary::ToJson() const {
     << ",\n  \"frames_without_motion\": " << frames_without_motion << ",\n  \"detections\": " << detections
     << ",\n  \"front_vertical_offset_px\": " << front_vertical_offset_px << ",\n  \"map_video\": " << JsonString(map_video)
     << ",\n  \"seconds\": " << seconds << ",\n  \"frames_per_second\": " << frames_per_second
-    << ",\n  \"stage_seconds\": {";
+    << ",\n  \"masks\": {";
+  bool first_mask = true;
+  for (const auto& [camera, m] : masks) {
+    o << (first_mask ? "" : ", ") << JsonString(camera) << ": {\"source\": " << JsonString(m.source)
+      << ", \"valid_fraction\": " << m.valid_fraction << "}";
+    first_mask = false;
+  }
+  o << "},\n  \"stage_seconds\": {";
   bool first = true;
   for (const auto& [k, v] : stage_seconds) {
     o << (first ? "" : ", ") << JsonString(k) << ": " << v;
@@ -108,6 +115,54 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
   in.can = ReadCanLog((fs::path(drive_dir) / "can.csv").string(), o.can);
   for (const std::string& w : in.can.warnings) s->warnings.push_back(w);
   return in;
+}
+
+// A camera's first frames, over the drive's first `seconds`.
+std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const std::string& camera, const DriveInput& in,
+                                 double seconds) {
+  std::unique_ptr<FrameSource> source = FrameSource::Open(drive_dir, camera);
+  std::vector<cv::Mat> frames;
+  cv::Mat image;
+  for (int i = 0; i < in.frames && (i == 0 || in.times[i] - in.times[0] <= seconds); ++i) {
+    if (!source->Read(&image)) break;
+    frames.push_back(image.clone());
+  }
+  if (frames.empty()) throw Error(Str(drive_dir, ": ", source->description(), " has no frame to estimate its mask from"));
+  return frames;
+}
+
+// Each camera's mask (DESIGN.md §3.2): the drive's masks/<camera>.png, else rig.yaml's, else
+// estimated from the drive's first seconds.
+void AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput* in, DriveSummary* s) {
+  for (RigCamera& camera : in->rig.cameras) {
+    if (camera.name != "left" && camera.name != "right") continue;
+    const fs::path file = fs::path(drive_dir) / "masks" / (camera.name + ".png");
+    MaskSummary& m = s->masks[camera.name];
+    if (fs::exists(file)) {
+      camera.mask = ReadCameraMask(file.string(), camera.model);
+      m.source = "drive";
+    } else if (!camera.mask.empty()) {
+      m.source = "rig.yaml";
+    } else if (o.estimate_masks && in->frames > 0) {
+      camera.mask = EstimateFieldMask(FirstFrames(drive_dir, camera.name, *in, o.mask_estimate_s), camera.model,
+                                      o.field_mask);
+      m.source = "estimated";
+    } else {
+      m.source = "model";
+    }
+    const cv::Mat valid = CameraValidMask(camera);
+    m.valid_fraction = static_cast<double>(cv::countNonZero(valid)) / static_cast<double>(valid.total());
+  }
+}
+
+// The masks used, as pictures a user can check and correct (and put into the drive's masks/).
+void WriteMasks(const Rig& rig, const fs::path& dir) {
+  fs::create_directories(dir);
+  for (const RigCamera& camera : rig.cameras) {
+    if (camera.name != "left" && camera.name != "right") continue;
+    const std::string path = (dir / (camera.name + ".png")).string();
+    if (!cv::imwrite(path, CameraValidMask(camera))) throw Error(Str(path, ": cannot write the mask"));
+  }
 }
 
 // The pictures a drive writes into its temporary folder: the map video (H.264 in MP4 where
@@ -355,12 +410,14 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   s.output_dir = DriveOutputDir(drive_dir, out_root);
   s.drive = fs::path(s.output_dir).filename().string();
   DriveInput in = OpenDrive(drive_dir, o, &s);
+  AttachMasks(drive_dir, o, &in, &s);
   // Outputs under a temporary name.
   fs::create_directories(out_root);
   const fs::path tmp = fs::path(out_root) / Str(".", s.drive, ".tmp-", ::getpid());
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   try {
+    WriteMasks(in.rig, tmp / "masks");
     DriveRun run(drive_dir, o, in, tmp, &s);
     run.Run(progress);
     run.WriteFiles();

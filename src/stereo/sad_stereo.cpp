@@ -233,6 +233,59 @@ void TextureMaskInto(const cv::Mat& log, const StereoOptions& o, cv::Mat& change
   }
 }
 
+// 255 where the matching window of `o` (and the interest operator's one column either side) holds
+// valid pixels only. Outside the image counts as valid:
+// the matcher's own column and row limits handle the borders.
+void WindowValidInto(const cv::Mat& valid, const StereoOptions& o, cv::Mat& out) {
+  const cv::Mat kernel = cv::getStructuringElement(cv::MORPH_RECT, cv::Size(o.block_width + 2, o.block_height));
+  cv::erode(valid, out, kernel, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(255));
+}
+
+// The image with its invalid pixels replaced by a smooth extension of the valid ones (normalised
+// convolution), so that the prefilter sees no edge where the valid area ends.
+void FillInvalid(const cv::Mat& grey, const cv::Mat& valid, cv::Mat* scratch, cv::Mat& out) {
+  cv::Mat &weight = scratch[0], &sum = scratch[1];
+  valid.convertTo(weight, CV_32F, 1.0 / 255.0);
+  grey.convertTo(sum, CV_32F);
+  sum = sum.mul(weight);
+  const double sigma = 0.02 * std::max(grey.cols, grey.rows) + 2.0;
+  cv::GaussianBlur(sum, sum, cv::Size(), sigma, sigma, cv::BORDER_REPLICATE);
+  cv::GaussianBlur(weight, weight, cv::Size(), sigma, sigma, cv::BORDER_REPLICATE);
+  cv::divide(sum, cv::max(weight, 1e-3), sum);
+  grey.copyTo(out);
+  cv::Mat filled;
+  sum.convertTo(filled, CV_8U);
+  filled.copyTo(out, valid == 0);
+}
+
+// Validity at half resolution: a coarse pixel is valid when every fine pixel under cv::pyrDown's
+// 5x5 kernel is.
+void HalveValidity(const cv::Mat& valid, cv::Size coarse_size, cv::Mat& scratch, cv::Mat& out) {
+  cv::erode(valid, scratch, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)), cv::Point(-1, -1), 1,
+            cv::BORDER_CONSTANT, cv::Scalar(255));
+  cv::resize(scratch, out, coarse_size, 0, 0, cv::INTER_NEAREST);
+}
+
+// Invalidates the disparities whose reference window or matched window (at the nearer whole
+// columns either side of the sub-pixel match) is not wholly valid.
+void KeepValidWindows(const cv::Mat& left_valid, const cv::Mat& right_valid, cv::Mat& disparity) {
+  if (left_valid.empty() && right_valid.empty()) return;
+  cv::parallel_for_(cv::Range(0, disparity.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      float* d = disparity.ptr<float>(y);
+      const std::uint8_t* l = left_valid.empty() ? nullptr : left_valid.ptr<std::uint8_t>(y);
+      const std::uint8_t* r = right_valid.empty() ? nullptr : right_valid.ptr<std::uint8_t>(y);
+      for (int x = 0; x < disparity.cols; ++x) {
+        if (d[x] == kInvalidDisparity) continue;
+        const double at = x - static_cast<double>(d[x]);
+        const int lo = static_cast<int>(std::floor(at)), hi = static_cast<int>(std::ceil(at));
+        const bool ok = (!l || l[x]) && (!r || (lo >= 0 && hi < disparity.cols && r[lo] && r[hi]));
+        if (!ok) d[x] = kInvalidDisparity;
+      }
+    }
+  });
+}
+
 // The coarse level's disparity range: half the fine one's, rounded outwards.
 int HalfMin(const StereoOptions& o) { return static_cast<int>(std::floor(o.min_disparity / 2.0)); }
 int HalfCount(const StereoOptions& o) {
@@ -266,9 +319,10 @@ SadStereoMatcher::SadStereoMatcher(const StereoOptions& options)
 
 SadStereoMatcher::~SadStereoMatcher() = default;
 
-const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::Mat& right_log, const cv::Mat& textured,
-                                            int d_min, int n, int level, int first_column) {
+const cv::Mat& SadStereoMatcher::MatchLevel(const PreparedView& left, const PreparedView& right, int d_min, int n,
+                                            int level, int first_column) {
   const StereoOptions& o = options_;
+  const cv::Mat &left_log = left.log[level], &right_log = right.log[level], &textured = left.textured[level];
   LevelBuffers& buf = ws_->levels[level];
   const int w = left_log.cols, h = left_log.rows;
   cv::Mat& out = buf.out;
@@ -311,10 +365,12 @@ const cv::Mat& SadStereoMatcher::MatchLevel(const cv::Mat& left_log, const cv::M
       if (b > a) kernel.match_rows(in, a, b, buf.stripes[s].Prepare(w, in.n_padded, in.pad));
     }
   });
+  KeepValidWindows(left.window_valid[level], right.window_valid[level], out);
   return out;
 }
 
-cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_in) {
+cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_in, const cv::Mat& left_valid,
+                                  const cv::Mat& right_valid) {
   const cv::Mat left = ToGrey(left_in, "left"), right = ToGrey(right_in, "right");
   if (left.size() != right.size()) {
     throw Error(Str("stereo: the right image (", right.cols, "x", right.rows, ") must have the left's rows and columns (",
@@ -323,7 +379,9 @@ cv::Mat SadStereoMatcher::Compute(const cv::Mat& left_in, const cv::Mat& right_i
   RequireMatchable(left.cols, left.rows, options_);
   // Both images prepared at once (OpenCV runs the filters inside serially then).
   cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& r) {
-    for (int i = r.start; i < r.end; ++i) Prepare(i == 0 ? left : right, i == 0 ? &ws_->left : &ws_->right);
+    for (int i = r.start; i < r.end; ++i) {
+      Prepare(i == 0 ? left : right, i == 0 ? &ws_->left : &ws_->right, i == 0 ? left_valid : right_valid);
+    }
   });
   return Compute(ws_->left, ws_->right);
 }
@@ -364,11 +422,22 @@ void SadStereoMatcher::FillFromCoarse(const cv::Mat& coarse, int first_column, c
   });
 }
 
-void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view) const {
+void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view, const cv::Mat& valid) const {
   const StereoOptions& o = options_;
-  const cv::Mat grey = ToGrey(image, "prepared");
+  cv::Mat grey = ToGrey(image, "prepared");
+  if (!valid.empty() && (valid.size() != grey.size() || valid.type() != CV_8U)) {
+    throw Error(Str("stereo: the validity mask (", valid.cols, "x", valid.rows,
+                    ") must be 8-bit and of the image's size (", grey.cols, "x", grey.rows, ")"));
+  }
+  cv::Mat filled;
+  if (!valid.empty() && cv::countNonZero(valid) < static_cast<int>(valid.total())) {
+    FillInvalid(grey, valid, view->scratch, filled);
+    grey = filled;
+  }
   LogPrefilterInto(grey, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[0]);
   TextureMaskInto(view->log[0], o, view->scratch[0], view->textured[0]);
+  for (cv::Mat& v : view->window_valid) v.release();
+  if (!valid.empty()) WindowValidInto(valid, o, view->window_valid[0]);
   if (!o.two_levels) {
     view->log[1].release();
     view->textured[1].release();
@@ -377,6 +446,11 @@ void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view) const {
   cv::pyrDown(grey, view->scratch[3]);
   LogPrefilterInto(view->scratch[3], o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[1]);
   TextureMaskInto(view->log[1], o, view->scratch[0], view->textured[1]);
+  if (!valid.empty()) {
+    cv::Mat& coarse = view->scratch[3];
+    HalveValidity(valid, view->log[1].size(), view->scratch[0], coarse);
+    WindowValidInto(coarse, o, view->window_valid[1]);
+  }
 }
 
 void SadStereoMatcher::Mirror(const PreparedView& view, PreparedView* mirrored) {
@@ -384,10 +458,16 @@ void SadStereoMatcher::Mirror(const PreparedView& view, PreparedView* mirrored) 
     if (view.log[level].empty()) {
       mirrored->log[level].release();
       mirrored->textured[level].release();
+      mirrored->window_valid[level].release();
       continue;
     }
     cv::flip(view.log[level], mirrored->log[level], 1);
     cv::flip(view.textured[level], mirrored->textured[level], 1);
+    if (view.window_valid[level].empty()) {
+      mirrored->window_valid[level].release();
+    } else {
+      cv::flip(view.window_valid[level], mirrored->window_valid[level], 1);
+    }
   }
 }
 
@@ -402,17 +482,14 @@ cv::Mat SadStereoMatcher::Compute(const PreparedView& left, const PreparedView& 
     throw Error(Str("stereo: first_column = ", first_column, ": violated constraint 0..", w - 1));
   }
   RequireMatchable(w, left.log[0].rows, o);
-  cv::Mat fine =
-      MatchLevel(left.log[0], right.log[0], left.textured[0], o.min_disparity, o.num_disparities, 0, first_column).clone();
+  cv::Mat fine = MatchLevel(left, right, o.min_disparity, o.num_disparities, 0, first_column).clone();
   // Coarse level: half resolution, half the disparities, the same window (twice the area).
   const ColumnRange coarse_columns = MatchableColumns(w / 2, HalfMin(o), HalfCount(o), o.block_width);
   if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width ||
       left.log[0].rows / 2 <= o.block_height) {
     return fine;
   }
-  FillFromCoarse(MatchLevel(left.log[1], right.log[1], left.textured[1], HalfMin(o), HalfCount(o), 1,
-                            first_column / 2),
-                 first_column, fine);
+  FillFromCoarse(MatchLevel(left, right, HalfMin(o), HalfCount(o), 1, first_column / 2), first_column, fine);
   return fine;
 }
 

@@ -35,6 +35,19 @@ ViewSpec CentredSpec(int width, int height, double focal_px, const Eigen::Vector
   return s;
 }
 
+// True when the camera's mask (none: every pixel) marks all the pixels that bilinear sampling at
+// `px` reads as seeing the world.
+bool SeesWorld(const cv::Mat& mask, const Eigen::Vector2d& px) {
+  if (mask.empty()) return true;
+  const int x0 = static_cast<int>(std::floor(px.x())), y0 = static_cast<int>(std::floor(px.y()));
+  for (int y = std::max(0, y0); y <= std::min(mask.rows - 1, y0 + 1); ++y) {
+    for (int x = std::max(0, x0); x <= std::min(mask.cols - 1, x0 + 1); ++x) {
+      if (!mask.at<std::uint8_t>(y, x)) return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 ViewSpec FrontViewSpec(const Rig& rig, const std::string& left_camera,
@@ -73,7 +86,7 @@ VirtualView::VirtualView(const RigCamera& camera, const ViewSpec& spec)
       for (int x = 0; x < spec.width; ++x) {
         const Eigen::Vector3d ray((x - spec.cx) / spec.focal_px, (y - spec.cy) / spec.focal_px, 1.0);
         Eigen::Vector2d px;
-        if (model.Project(camera_from_view * ray, &px) && model.InImage(px)) {
+        if (model.Project(camera_from_view * ray, &px) && model.InImage(px) && SeesWorld(camera.mask, px)) {
           m[x] = cv::Vec2f(static_cast<float>(px.x()), static_cast<float>(px.y()));
           k[x] = 255;
         } else {

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <opencv2/core.hpp>
 
 #include "dps/camera/camera_model.h"
 
@@ -49,6 +50,10 @@ struct RigCamera {
   std::string name;                 // "left", "right", ...
   CameraModel model;                // intrinsics
   Pose vehicle_from_camera;         // extrinsics, P_vehicle = R P_camera + t
+  // Optional: which pixels see the world (CV_8U of the model's size; 255 = sees it, 0 = never
+  // does: beyond the mirror's or lens's field, the own car). Empty: the model's domain alone.
+  cv::Mat mask;
+  std::string mask_file;            // the file rig.yaml names for it (as written there), or empty
 };
 
 // The vehicle and its cameras, as in rig.yaml (DESIGN.md §3.1).

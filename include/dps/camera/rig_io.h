@@ -4,8 +4,10 @@
 // rig.yaml, per camera: name, model (hyperbolic | unified | fisheye), width, height, K (3x3),
 // a and b (hyperbolic), xi (unified), dist [k1, k2, k3, k4] (fisheye), R (3x3, camera -> vehicle,
 // orthonormal within 1e-6, det +1), t (3x1, metres, vehicle frame), and optionally rim_radius_px
-// (pixels around the principal point that see the scene; 0 or absent = no rim). Matrices may be
-// written as !!opencv-matrix or as plain row-major lists.
+// (pixels around the principal point that see the scene; 0 or absent = no rim) and mask (an 8-bit
+// image of the camera's size, 255 = sees the world, relative to the rig file's folder; ReadRig
+// loads it into RigCamera::mask). Matrices may be written as !!opencv-matrix or as plain row-major
+// lists.
 #pragma once
 
 #include <string>

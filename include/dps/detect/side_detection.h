@@ -136,6 +136,7 @@ class SideDetector {
   // the road along the view axis (0 where there is no road); the road's disparity is f B times it.
   struct ViewGeometry {
     cv::Mat ignore, inverse_depth;
+    cv::Mat valid;  // 255 where the view sees the world (mirrored for the left side, as matched)
   };
   const ViewGeometry& Geometry(const VirtualView& view, std::pair<int, long> key);
   // The matched pair of one call: the reference (current) view, its geometry, and the camera's

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "dps/camera/valid_mask.h"
 #include "dps/map/occupancy_grid.h"
 #include "dps/map/surround_map.h"
 #include "dps/map/tracker.h"
@@ -27,6 +28,17 @@ struct DriveOptions {
   TrackerOptions tracker;
   OccupancyOptions occupancy;
   bool truncate = false;          // left and right with different frame counts: use the shorter
+  // Cameras with no mask (neither masks/<camera>.png in the drive nor `mask:` in rig.yaml): estimate
+  // what lies beyond the field from the drive's first mask_estimate_s seconds (EstimateFieldMask).
+  bool estimate_masks = true;
+  double mask_estimate_s = 2.0;   // > 0
+  FieldMaskOptions field_mask;
+};
+
+// Where a camera's mask came from, and the share of its pixels that see the world.
+struct MaskSummary {
+  std::string source;             // "drive" (masks/<camera>.png), "rig.yaml", "estimated", "model"
+  double valid_fraction = 0.0;
 };
 
 struct DriveSummary {
@@ -37,6 +49,7 @@ struct DriveSummary {
   int detections = 0;
   double front_vertical_offset_px = 0.0;  // drift correction of the front pair at the end
   std::string map_video;          // the map video's file name and codec ("map.mp4 (H.264)"); "" = none
+  std::map<std::string, MaskSummary> masks;  // by camera; the masks used are written to masks/
   std::vector<std::string> warnings;
   std::map<std::string, double> stage_seconds;  // decode, front, sides, map, write
   double seconds = 0.0;
@@ -49,7 +62,8 @@ std::string DriveOutputDir(const std::string& drive_dir, const std::string& out_
 // True when that folder holds a complete run (summary.json is written last).
 bool DriveOutputComplete(const std::string& output_dir);
 
-// Processes a drive; the outputs are built in a temporary folder and renamed into place when
+// Processes a drive (each camera's validity: its mask from the drive, rig.yaml or estimated, see
+// DriveOptions; the masks used are written to <output>/masks/<camera>.png); the outputs are built in a temporary folder and renamed into place when
 // complete (an existing output folder is replaced). `progress(done, total)` is called after each
 // frame. Throws dps::Error (naming the drive's file) for bad input.
 DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_root, const DriveOptions& options,

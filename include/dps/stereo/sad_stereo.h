@@ -22,6 +22,10 @@
 //    match seen from the right image.
 // 4. Two levels: the same search on half-resolution images fills pixels the full-resolution level
 //    left invalid (low texture), with twice the coarse disparity.
+// Validity: an image may come with a mask of the pixels that see the world (a view's pixels with a
+// camera source, inside the camera's field, not the own car). No disparity then comes from a window
+// that touches an invalid pixel in either image, at either level: the edge of a camera's field is
+// never matched.
 // Temporal consistency (the paper's variance check over frames) is the separate, stateful
 // TemporalConsistencyFilter below.
 #pragma once
@@ -86,8 +90,10 @@ class SadStereoMatcher {
   SadStereoMatcher& operator=(const SadStereoMatcher&) = delete;
 
   // Disparity of `left` (reference) against `right`: CV_8U or CV_8UC3 (converted to grey), same
-  // size, at least block size + num_disparities wide. Throws dps::Error for bad inputs.
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right);
+  // size, at least block size + num_disparities wide; optional validity masks as for Prepare.
+  // Throws dps::Error for bad inputs.
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right, const cv::Mat& left_valid = cv::Mat(),
+                  const cv::Mat& right_valid = cv::Mat());
 
   // A view prefiltered for matching (steps 1 and 3's interest operator, at each level), for a
   // view matched more than once: prepared once, matched with either view as the reference and
@@ -95,11 +101,15 @@ class SadStereoMatcher {
   struct PreparedView {
     cv::Mat log[2];       // the LoG image, full and (two levels) half resolution
     cv::Mat textured[2];  // the interest operator's mask (255: textured window)
+    // 255 where the matching window (and the prefilter's support under it) holds valid pixels
+    // only; empty when the whole image is valid.
+    cv::Mat window_valid[2];
     cv::Mat scratch[4];   // working memory, kept between calls
   };
-  // Prefilters a grey or BGR image into `view` (its buffers reused). Const: concurrent calls on
-  // one matcher are safe.
-  void Prepare(const cv::Mat& image, PreparedView* view) const;
+  // Prefilters a grey or BGR image into `view` (its buffers reused). `valid` (optional, CV_8U of
+  // the image's size): 255 where the pixel sees the world. Const: concurrent calls on one matcher
+  // are safe.
+  void Prepare(const cv::Mat& image, PreparedView* view, const cv::Mat& valid = cv::Mat()) const;
   // `view` turned left to right (the pair then matches the other way round).
   static void Mirror(const PreparedView& view, PreparedView* mirrored);
   // Disparity of the prepared `left` against the prepared `right` (the same size, both prepared by
@@ -113,8 +123,8 @@ class SadStereoMatcher {
  private:
   struct Workspace;
   // One level of prefiltered images, the left view's columns from first_column on.
-  const cv::Mat& MatchLevel(const cv::Mat& left_log, const cv::Mat& right_log, const cv::Mat& textured,
-                            int min_disparity, int num_disparities, int level, int first_column);
+  const cv::Mat& MatchLevel(const PreparedView& left, const PreparedView& right, int min_disparity,
+                            int num_disparities, int level, int first_column);
   // Fills the fine level's invalid pixels from first_column on with twice the coarse disparity.
   void FillFromCoarse(const cv::Mat& coarse, int first_column, cv::Mat& fine) const;
   StereoOptions options_;

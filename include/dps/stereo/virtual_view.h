@@ -5,7 +5,8 @@
 // (cx, cy), size, and an orientation `vehicle_from_view` whose columns are the view's x (image
 // right), y (image down) and z (viewing direction) axes in the vehicle frame. The remap table
 // from view pixels to omni pixels is built once (CameraModel::Project per view pixel); rendering
-// is one cv::remap. View pixels with no omni source (outside the rim or the image) are masked.
+// is one cv::remap. View pixels with no omni source (outside the rim or the image, or where the
+// camera's mask says the camera does not see the world) are masked.
 //
 // - Front views of the two cameras share one orientation, looking along +Z with rows parallel to
 //   the baseline, so the pair is rectified (eq. 11): x_l - x_r = f B / Z, y_l = y_r, and
