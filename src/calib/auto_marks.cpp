@@ -149,14 +149,23 @@ void AutoMarkOptions::Check() const {
   Require(max_marks_per_line >= 3, "max_marks_per_line", max_marks_per_line, ">= 3");
 }
 
+AutoMarkOptions AutoMarkOptions::ScaledTo(int width) const {
+  const double s = width / 640.0;
+  AutoMarkOptions o = *this;
+  o.tophat_px = std::max(3, 2 * static_cast<int>(std::lround((tophat_px * s - 1) / 2)) + 1);
+  o.min_points = std::max(3, static_cast<int>(std::lround(min_points * s * s)));
+  return o;
+}
+
 std::vector<Mark> DetectMarks(const cv::Mat& image, const Rig& nominal, const std::string& camera,
-                              const AutoMarkOptions& o, int first_line, std::vector<AutoMarkLine>* lines_out) {
-  o.Check();
+                              const AutoMarkOptions& options, int first_line, std::vector<AutoMarkLine>* lines_out) {
+  options.Check();
   const RigCamera& cam = nominal.Camera(camera);
   if (image.cols != cam.model.width() || image.rows != cam.model.height()) {
     throw Error(Str("camera '", camera, "': image is ", image.cols, "x", image.rows, ", the model ",
                     cam.model.width(), "x", cam.model.height()));
   }
+  const AutoMarkOptions o = options.ScaledTo(image.cols);
   const std::vector<Paint> paint = FindPaint(image, nominal, cam, o);
   std::vector<bool> used(paint.size(), false);
   std::vector<Mark> marks;

@@ -24,6 +24,9 @@
 
 namespace dps {
 
+// Settings in pixels are for images 640 px wide and scale with the image: the top-hat kernel with
+// its width, pixel counts with its area (a line's paint pixels grow with both its length and its
+// width in pixels); DetectMarks applies ScaledTo.
 struct AutoMarkOptions {
   int tophat_px = 9;                // top-hat kernel diameter: paint narrower than this, odd >= 3
   double tophat_threshold = 40.0;   // grey levels above the local opening, > 0
@@ -34,13 +37,15 @@ struct AutoMarkOptions {
   double angle_step_deg = 0.2;      // Hough steps, > 0
   double offset_step_m = 0.05;
   double inlier_m = 0.15;           // road-plane distance of a paint pixel to its line, > 0
-  int min_points = 80;              // paint pixels a line needs, >= 3
+  int min_points = 80;              // paint pixels a line needs, >= 3 (at 640 px)
   double min_length_m = 2.0;        // ... spread along at least this, > 0
   double min_offset_m = 0.5;        // lines passing closer to the camera's footprint are radial
   int max_marks_per_line = 300;     // pixels written per line (evenly along it), >= 3
 
   // Throws dps::Error naming the field and the violated constraint.
   void Check() const;
+  // These settings for images `width` px wide (tophat_px odd and >= 3, min_points >= 3).
+  AutoMarkOptions ScaledTo(int width) const;
 };
 
 // One line found: its axis family, support and extent, and how well its rays fit a great circle.
