@@ -11,6 +11,7 @@
 #include "dps/pipeline/batch.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
+#include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
 
 namespace fs = std::filesystem;
@@ -119,13 +120,73 @@ void TestShardsAndLists() {
   CHECK_THROWS_WITH(o.Check(), dps::Error, "jobs");
 }
 
+// Nothing a user recorded is ever replaced or deleted (issue: data loss): an output that is or lies
+// inside the drive, the current folder, a folder dps did not write, two drives of one name.
+void TestOutputsNeverDestroyInputs(const std::string& drive) {
+  dps::DriveOptions o;
+  o.map_video = false;
+  const fs::path d(drive), parent = d.parent_path();
+  const auto intact = [&] { return fs::exists(d / "rig.yaml") && fs::exists(d / "can.csv") && fs::exists(d / "left"); };
+  // --out <the drive's parent>: the output would be the drive itself.
+  CHECK_THROWS_WITH(dps::ProcessDrive(drive, parent.string(), o), dps::Error, "input");
+  // --out <the drive>: the output would lie inside it.
+  CHECK_THROWS_WITH(dps::ProcessDrive(drive, drive, o), dps::Error, "input");
+  CHECK(intact());
+  CHECK(!fs::exists(d / d.filename()));
+  // "." from inside the drive names the drive, not ".", so ../results/<drive> is its output and the
+  // other results stay.
+  const fs::path here = fs::current_path();
+  fs::create_directories(kTmp / "results" / "other");
+  std::ofstream(kTmp / "results" / "other" / "keep.txt") << "mine\n";
+  fs::current_path(d);
+  const dps::DriveSummary s = dps::ProcessDrive(".", "../../results", o);
+  fs::current_path(here);
+  CHECK_EQ(s.drive, d.filename().string());
+  CHECK(fs::exists(kTmp / "results" / "other" / "keep.txt"));
+  CHECK(fs::exists(kTmp / "results" / d.filename() / "summary.json"));
+  // A folder of that name that dps did not write is left alone, before any work.
+  fs::create_directories(kTmp / "results2" / d.filename());
+  std::ofstream(kTmp / "results2" / d.filename() / "notes.txt") << "mine\n";
+  CHECK_THROWS_WITH(dps::ProcessDrive(drive, (kTmp / "results2").string(), o), dps::Error, "left alone");
+  CHECK(fs::exists(kTmp / "results2" / d.filename() / "notes.txt"));
+  // The current folder as the output.
+  fs::current_path(kTmp / "results2");
+  CHECK_THROWS_WITH(dps::CheckOutputFolder(".", {drive}), dps::Error, "current folder");
+  fs::current_path(here);
+  // dps-synth: never into the current folder, never over a folder it did not write.
+  dps::SynthOptions so;
+  so.frames = 1;
+  so.overwrite = true;
+  const dps::Scene scene = dps_test::SmallScene("lead_car", 320, 240);
+  CHECK_THROWS_WITH(dps::Synthesize(scene, (kTmp / "results2" / d.filename()).string(), so), dps::Error, "left alone");
+  fs::current_path(kTmp / "results2");
+  CHECK_THROWS_WITH(dps::Synthesize(scene, ".", so), dps::Error, "current folder");
+  fs::current_path(here);
+  CHECK(fs::exists(kTmp / "results2" / d.filename() / "notes.txt"));
+  // Two drives of one folder name in a batch: neither runs, both are reported, nothing written.
+  fs::create_directories(kTmp / "twin");
+  fs::copy(d, kTmp / "twin" / d.filename(), fs::copy_options::recursive);
+  dps::BatchOptions b;
+  b.out_root = (kTmp / "twins_out").string();
+  b.jobs = 2;
+  b.drive = o;
+  Recorded r;
+  const dps::BatchResult result = dps::RunBatch({drive, (kTmp / "twin" / d.filename()).string()}, b, Record(&r));
+  CHECK_EQ(result.failed, 2);
+  CHECK_EQ(result.processed, 0);
+  CHECK(!fs::exists(kTmp / "twins_out" / d.filename()));
+  CHECK(r.failed.size() == 2 && r.failed[0].find("two drives of one folder name") != std::string::npos);
+}
+
 }  // namespace
 
 int main() {
   fs::remove_all(kTmp);
   fs::create_directories(kTmp);
   TestShardsAndLists();
-  TestBatch(MakeDrives());
+  const std::vector<std::string> drives = MakeDrives();
+  TestBatch(drives);
+  TestOutputsNeverDestroyInputs(drives[0]);
   fs::remove_all(kTmp);
   return dps_test::Report();
 }

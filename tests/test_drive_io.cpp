@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -49,6 +50,16 @@ void TestCanLogs() {
   CHECK_NEAR(p.heading_rad, -0.05, 1e-9);  // 0.1 rad/s to the left for 0.5 s
   CHECK(!dps::MotionBetween(log, 1.5, 2.5, &p, &why));
   CHECK(why.find("outside the CAN log") != std::string::npos);
+  // Times that are not finite never reach the integration (a NaN frame time read past the samples).
+  CHECK(!dps::MotionBetween(log, 0.5, std::nan(""), &p, &why));
+  CHECK(why.find("not finite") != std::string::npos);
+  CHECK(!dps::MotionBetween(log, -HUGE_VAL, HUGE_VAL, &p, &why));
+  CHECK_THROWS_WITH(log.profile.At(std::nan("")), std::invalid_argument, "not finite");
+  // frames.csv: NaN, infinite, repeated or backwards times are errors naming the line.
+  CHECK_THROWS_WITH(dps::ReadFrameTimes(Write("frames.csv", "frame,t\n0,0\n1,nan\n")), dps::Error, "frames.csv:3");
+  CHECK_THROWS_WITH(dps::ReadFrameTimes(Write("frames.csv", "frame,t\n0,0\n1,inf\n")), dps::Error, "no finite time");
+  CHECK_THROWS_WITH(dps::ReadFrameTimes(Write("frames.csv", "frame,t\n0,0\n1,0\n")), dps::Error, "does not come after");
+  CHECK_THROWS_WITH(dps::ReadFrameTimes(Write("frames.csv", "frame,t\n0,1\n1,0.5\n")), dps::Error, "does not come after");
   // Units and names of another log: km/h and deg/s.
   dps::CanLogFormat f;
   f.time_column = "time";

@@ -95,7 +95,7 @@ void TestParkedBeside() {
   CheckPlacement(r, p.truth, "parked car beside, right camera, 640x480");
   // The frame's sector: the matched columns of the shrunk views span less than at full size, and
   // everything found lies in it.
-  const dps::Sector& full = dps::PipelineCoverage(p.rig, dps::DefaultPipelineOptions(p.rig)).sectors[2];
+  const dps::Sector full = dps::PipelineCoverage(p.rig, dps::DefaultPipelineOptions(p.rig)).sectors[2];  // a copy
   CHECK_EQ(r.sector.name, std::string("right"));
   CHECK(r.sector.half_angle_rad < full.half_angle_rad - 0.05);
   int outside = 0;

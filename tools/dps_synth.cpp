@@ -10,6 +10,7 @@
 #include "dps/synth/randomize.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
+#include "dps/util/atomic_file.h"
 
 namespace {
 
@@ -19,7 +20,8 @@ Renders the scene (docs/synth.md) into a drive folder: rig.yaml, left/ and right
 can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and rig_true.yaml
 (rig.yaml is then the nominal rig to calibrate). Options override the scene file.
 
-  --out DIR          output folder (built under a temporary name, renamed when complete)
+  --out DIR          output folder (built under a temporary name, renamed when complete; never
+                     the current folder or one holding an input)
   --size WxH         image size, e.g. 320x240 (the rig's cameras are rescaled)
   --seed N           random seed of textures, noise and calibration perturbations
   --frames N         render only the first N frames
@@ -40,7 +42,7 @@ can.csv, frames.csv, truth.csv. A calibration scene also writes marks.csv and ri
                      MPEG-4 part 2 where OpenCV has no H.264 encoder; video_codec.txt says which)
   --no-png           do not write the PNG folders (needs --video)
   --truth-images     also write range/<camera>/ (16-bit mm) and ids/<camera>/ truth images
-  --force            replace DIR if it exists
+  --force            replace DIR if it exists and dps-synth wrote it (it holds .dps-synth)
   --quiet            no progress on stderr
   --help             this text
 )";
@@ -57,6 +59,13 @@ int main(int argc, char** argv) {
     }
     if (args.positional().size() != 1) throw dps::Error("expected one scene file (see --help)");
     if (!args.Has("out")) throw dps::Error("missing --out DIR (see --help)");
+    {
+      std::vector<std::string> inputs{args.positional()[0]};
+      for (const char* rig : {"rig", "processing-rig"}) {
+        if (args.Has(rig)) inputs.push_back(args.Get(rig));
+      }
+      dps::CheckOutputFolder(args.Get("out"), inputs);
+    }
     dps::Scene scene = dps::ReadScene(args.positional()[0]);
     if (args.Has("rig")) scene.rig = dps::ReadRig(args.Get("rig"));
     if (args.Has("size")) {

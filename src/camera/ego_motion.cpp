@@ -33,6 +33,7 @@ MotionProfile::MotionProfile(std::vector<MotionSample> samples) : samples_(std::
 }
 
 MotionSample MotionProfile::At(double t) const {
+  if (!std::isfinite(t)) throw std::invalid_argument(Str("motion profile: time ", t, " is not finite"));
   if (t <= samples_.front().t_s) return {t, samples_.front().speed_mps, samples_.front().yaw_rate_radps};
   if (t >= samples_.back().t_s) return {t, samples_.back().speed_mps, samples_.back().yaw_rate_radps};
   const auto it = std::upper_bound(samples_.begin(), samples_.end(), t,

@@ -5,9 +5,11 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <thread>
 
+#include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
 
 namespace dps {
@@ -20,8 +22,11 @@ double SecondsSince(Clock::time_point start) { return std::chrono::duration<doub
 // done (for the batch's ETA), all reported under one lock.
 class Batch {
  public:
-  Batch(const std::vector<std::string>& drives, const BatchOptions& options, const BatchEvents& events)
-      : drives_(drives), options_(options), events_(events), fraction_(drives.size(), 0.0) {}
+  // shared: the drives (by index) whose output folder another drive of the whole list has, with
+  // that drive.
+  Batch(const std::vector<std::string>& drives, const BatchOptions& options, const BatchEvents& events,
+        std::map<size_t, std::string> shared)
+      : drives_(drives), options_(options), events_(events), fraction_(drives.size(), 0.0), shared_(std::move(shared)) {}
 
   void Work() {
     for (size_t i = next_++; i < drives_.size(); i = next_++) Process(i);
@@ -33,6 +38,17 @@ class Batch {
   void Process(size_t i) {
     const std::string& drive = drives_[i];
     const std::string out_dir = DriveOutputDir(drive, options_.out_root);
+    const auto shared = shared_.find(i);
+    if (shared != shared_.end()) {
+      ++failed_;
+      std::lock_guard<std::mutex> lock(mutex_);
+      fraction_[i] = 1.0;
+      if (events_.failed) {
+        events_.failed(drive, Str(drive, ": its output ", out_dir, " would also be that of ", shared->second,
+                                  " (two drives of one folder name); neither is processed"));
+      }
+      return;
+    }
     if (!options_.force && DriveOutputComplete(out_dir)) {
       ++skipped_;
       std::lock_guard<std::mutex> lock(mutex_);
@@ -82,6 +98,7 @@ class Batch {
   std::atomic<int> processed_{0}, skipped_{0}, failed_{0};
   std::mutex mutex_;
   std::vector<double> fraction_;
+  const std::map<size_t, std::string> shared_;
 };
 
 }  // namespace
@@ -124,8 +141,24 @@ std::vector<std::string> ShardOf(const std::vector<std::string>& drives, int sha
 
 BatchResult RunBatch(const std::vector<std::string>& drives, const BatchOptions& options, const BatchEvents& events) {
   options.Check();
-  const std::vector<std::string> mine = ShardOf(drives, options.shard, options.shards);
-  Batch batch(mine, options, events);
+  // Drives of one folder name would share an output folder: over the whole list (every shard sees
+  // it), each such drive is failed with the other named.
+  std::map<std::string, std::vector<size_t>> by_output;
+  for (size_t i = 0; i < drives.size(); ++i) by_output[AbsolutePath(DriveOutputDir(drives[i], options.out_root))].push_back(i);
+  std::map<size_t, std::string> shared_all;
+  for (const auto& [out, indices] : by_output) {
+    if (indices.size() < 2) continue;
+    for (size_t i : indices) shared_all[i] = drives[indices[i == indices[0] ? 1 : 0]];
+  }
+  std::vector<std::string> mine;
+  std::map<size_t, std::string> shared;
+  for (size_t i = 0; i < drives.size(); ++i) {
+    if (static_cast<int>(i % options.shards) != options.shard) continue;
+    const auto it = shared_all.find(i);
+    if (it != shared_all.end()) shared[mine.size()] = it->second;
+    mine.push_back(drives[i]);
+  }
+  Batch batch(mine, options, events, std::move(shared));
   std::vector<std::thread> threads;
   for (int j = 1; j < options.jobs; ++j) threads.emplace_back([&] { batch.Work(); });
   batch.Work();

@@ -140,6 +140,10 @@ CanLog ReadCanLog(const std::string& path, const CanLogFormat& f) {
 }
 
 bool MotionBetween(const CanLog& log, double t0, double t1, PlanarPose* pose, std::string* why) {
+  if (!std::isfinite(t0) || !std::isfinite(t1)) {
+    if (why) *why = Str("frame time not finite (", t0, " .. ", t1, " s)");
+    return false;
+  }
   if (t0 < log.t_begin || t1 > log.t_end) {
     if (why) *why = Str("outside the CAN log (", log.t_begin, " .. ", log.t_end, " s)");
     return false;
@@ -163,7 +167,13 @@ std::vector<double> ReadFrameTimes(const std::string& path) {
     if (frame != static_cast<double>(times.size())) {
       throw Error(Str(path, ":", t.Line(r), ": expected frame ", times.size(), ", got ", frame));
     }
-    times.push_back(t.Number(r, tc));
+    const double time = t.Number(r, tc);
+    if (!std::isfinite(time)) throw Error(Str(path, ":", t.Line(r), ": frame ", frame, " has no finite time (", time, ")"));
+    if (!times.empty() && time <= times.back()) {
+      throw Error(Str(path, ":", t.Line(r), ": frame ", frame, " at t = ", time, " s does not come after frame ",
+                      frame - 1, " at ", times.back(), " s"));
+    }
+    times.push_back(time);
   }
   return times;
 }

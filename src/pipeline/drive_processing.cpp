@@ -67,9 +67,8 @@ std::string DriveSummary::ToJson() const {
 }
 
 std::string DriveOutputDir(const std::string& drive_dir, const std::string& out_root) {
-  fs::path d = fs::path(drive_dir);
-  if (d.filename().empty()) d = d.parent_path();
-  return (fs::path(out_root) / d.filename()).string();
+  // The drive's own name, also for "." or "d/".
+  return (fs::path(out_root) / fs::path(AbsolutePath(drive_dir)).filename()).string();
 }
 
 bool DriveOutputComplete(const std::string& output_dir) {
@@ -409,6 +408,8 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   DriveSummary s;
   s.output_dir = DriveOutputDir(drive_dir, out_root);
   s.drive = fs::path(s.output_dir).filename().string();
+  CheckOutputFolder(s.output_dir, {drive_dir});
+  CheckReplaceable(s.output_dir, "summary.json");
   DriveInput in = OpenDrive(drive_dir, o, &s);
   AttachMasks(drive_dir, o, &in, &s);
   // Outputs under a temporary name.
@@ -429,8 +430,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     fs::remove_all(tmp, ec);
     throw;
   }
-  if (fs::exists(s.output_dir)) fs::remove_all(s.output_dir);
-  fs::rename(tmp, s.output_dir);
+  ReplaceFolder(tmp.string(), s.output_dir, "summary.json");
   return s;
 }
 

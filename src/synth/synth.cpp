@@ -241,10 +241,12 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
   if (options.video_codec != "MJPG" && options.video_codec != "H264") {
     throw Error("video codec '" + options.video_codec + "': expected MJPG or H264");
   }
-  const fs::path out(out_dir);
+  const fs::path out(AbsolutePath(out_dir));
   if (fs::exists(out) && !options.overwrite) {
     throw Error(Str(out_dir, ": already exists (use --force to replace it)"));
   }
+  CheckOutputFolder(out_dir, {});
+  CheckReplaceable(out_dir, kSynthMarker);
   const bool calibration = scene_in.kind == SceneKind::kCalibration;
   // The rig that renders: for a calibration scene the perturbed "true" rig.
   Scene scene = scene_in;
@@ -256,6 +258,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
   fs::create_directories(tmp);
   try {
     const SceneRenderer renderer(scene);
+    WriteFileAtomically((tmp / kSynthMarker).string(), "written by dps-synth; dps-synth --force may replace this folder\n");
     WriteRig(options.processing_rig ? *options.processing_rig : scene_in.rig, (tmp / "rig.yaml").string());
     if (calibration || options.processing_rig) WriteRig(scene.rig, (tmp / "rig_true.yaml").string());
     for (const auto& [name, content] : options.extra_files) WriteFileAtomically((tmp / name).string(), content);
@@ -284,8 +287,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
     fs::remove_all(tmp, ec);
     throw;
   }
-  if (fs::exists(out)) fs::remove_all(out);
-  fs::rename(tmp, out);
+  ReplaceFolder(tmp.string(), out_dir, kSynthMarker);
 }
 
 }  // namespace dps

@@ -29,6 +29,62 @@ void RenameReplacing(const std::string& from, const std::string& to) {
   }
 }
 
+std::string AbsolutePath(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::path p = std::filesystem::weakly_canonical(std::filesystem::absolute(path), ec);
+  return (ec ? std::filesystem::absolute(path).lexically_normal() : p).string();
+}
+
+namespace {
+
+// True when `inner` is `outer` or lies inside it (both absolute and normal).
+bool Within(const std::filesystem::path& inner, const std::filesystem::path& outer) {
+  auto i = inner.begin(), o = outer.begin();
+  for (; o != outer.end() && !o->empty(); ++o, ++i) {
+    if (i == inner.end() || *i != *o) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void CheckOutputFolder(const std::string& output, const std::vector<std::string>& inputs) {
+  const std::filesystem::path out(AbsolutePath(output));
+  const std::filesystem::path here(AbsolutePath("."));
+  if (Within(here, out)) {
+    throw Error(Str(output, ": the output folder is or contains the current folder; choose another"));
+  }
+  for (const std::string& input : inputs) {
+    const std::filesystem::path in(AbsolutePath(input));
+    if (Within(in, out) || Within(out, in)) {
+      throw Error(Str(output, ": the output folder would be, contain or lie inside the input ", input,
+                      "; choose another"));
+    }
+  }
+}
+
+void CheckReplaceable(const std::string& target, const std::string& marker) {
+  namespace fs = std::filesystem;
+  if (!fs::exists(target)) return;
+  if (!fs::is_directory(target) || !(fs::is_empty(target) || fs::exists(fs::path(target) / marker))) {
+    throw Error(Str(target, ": exists and is not an output of this tool (no ", marker,
+                    "); left alone: remove it yourself or choose another output"));
+  }
+}
+
+void ReplaceFolder(const std::string& tmp, const std::string& target, const std::string& marker) {
+  namespace fs = std::filesystem;
+  try {
+    CheckReplaceable(target, marker);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  if (fs::exists(target)) fs::remove_all(target);
+  fs::rename(tmp, target);
+}
+
 void WriteFileAtomically(const std::string& path, const std::string& content) {
   AtomicOutputFile file(path);
   file.stream() << content;

@@ -42,6 +42,8 @@ class MotionProfile {
   // Throws std::invalid_argument when the samples are empty, unsorted or not finite.
   explicit MotionProfile(std::vector<MotionSample> samples);
 
+  // Speed and yaw rate at t_s, linear between samples, held beyond them; throws
+  // std::invalid_argument for a time that is not finite.
   MotionSample At(double t_s) const;
   const std::vector<MotionSample>& samples() const { return samples_; }
 

@@ -60,7 +60,8 @@ CanLog ReadCanLog(const std::string& path, const CanLogFormat& format = CanLogFo
 // otherwise false and `why` says why.
 bool MotionBetween(const CanLog& log, double t0, double t1, PlanarPose* pose, std::string* why);
 
-// frames.csv: time of each frame index (frames listed in order). Throws dps::Error.
+// frames.csv: time of each frame index (frames listed in order, times finite and increasing).
+// Throws dps::Error naming the file and line.
 std::vector<double> ReadFrameTimes(const std::string& path);
 
 }  // namespace dps

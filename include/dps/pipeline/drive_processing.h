@@ -57,15 +57,19 @@ struct DriveSummary {
   std::string ToJson() const;
 };
 
-// The folder a drive's outputs go to: <out_root>/<drive folder name>.
+// The folder a drive's outputs go to: <out_root>/<drive folder name> (the folder's own name, also
+// when it is given as "." or with a trailing slash).
 std::string DriveOutputDir(const std::string& drive_dir, const std::string& out_root);
 // True when that folder holds a complete run (summary.json is written last).
 bool DriveOutputComplete(const std::string& output_dir);
 
-// Processes a drive (each camera's validity: its mask from the drive, rig.yaml or estimated, see
-// DriveOptions; the masks used are written to <output>/masks/<camera>.png); the outputs are built in a temporary folder and renamed into place when
-// complete (an existing output folder is replaced). `progress(done, total)` is called after each
-// frame. Throws dps::Error (naming the drive's file) for bad input.
+// Processes a drive. Each camera's validity: its mask from the drive, rig.yaml or estimated (see
+// DriveOptions); the masks used are written to <output>/masks/<camera>.png. The outputs are built
+// in a temporary folder and renamed into place when complete; an existing output folder is
+// replaced only when it holds an earlier run's summary.json, and an output folder that is,
+// contains or lies inside the drive, or the current folder, is refused before anything is
+// written. `progress(done, total)` is called after each frame. Throws dps::Error (naming the
+// drive's file) for bad input.
 DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_root, const DriveOptions& options,
                           const std::function<void(int, int)>& progress = nullptr);
 

@@ -45,7 +45,7 @@ struct SynthOptions {
   std::string video_codec = "MJPG";
   bool write_truth_images = false;// range/ and ids/ folders
   int frames = -1;                // > 0: render only this many frames
-  bool overwrite = false;         // replace an existing output folder
+  bool overwrite = false;         // replace an existing output folder that dps-synth wrote
   // A drive processed with another rig than the one that renders (a calibration error): that rig
   // is written as rig.yaml and the rendering rig as rig_true.yaml. Unset: rig.yaml renders. For a
   // calibration scene it is the nominal rig and the scene's own rig renders (no drawn perturbation).
@@ -56,9 +56,13 @@ struct SynthOptions {
   std::function<void(int, int)> progress;
 };
 
+// The file that marks a folder as written by Synthesize (overwrite replaces only such folders).
+inline constexpr const char* kSynthMarker = ".dps-synth";
+
 // Renders the scene into `out_dir`, built under a temporary name beside it and renamed when
 // complete, so that a killed run never leaves a folder that looks finished. Throws dps::Error when
-// the folder exists (without overwrite) or cannot be written.
+// the folder exists (without overwrite, or not written by Synthesize), is or contains the current
+// folder, or cannot be written.
 void Synthesize(const Scene& scene, const std::string& out_dir, const SynthOptions& options);
 
 }  // namespace dps

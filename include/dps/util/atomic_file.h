@@ -5,6 +5,7 @@
 
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace dps {
 
@@ -18,6 +19,23 @@ void RenameReplacing(const std::string& from, const std::string& to);
 
 // Writes `content` to `path` atomically; throws dps::Error naming the file on failure.
 void WriteFileAtomically(const std::string& path, const std::string& content);
+
+// `path` made absolute and normal (symbolic links resolved as far as the path exists), so that
+// "d", "./d" and "../x/d" of one folder compare equal and "." has a name.
+std::string AbsolutePath(const std::string& path);
+
+// Output folders never destroy inputs: throws dps::Error naming both when `output` is, contains or
+// lies inside one of `inputs`, or is or contains the current folder.
+void CheckOutputFolder(const std::string& output, const std::vector<std::string>& inputs);
+
+// Throws dps::Error naming `target` when it exists and is neither an empty folder nor one that holds
+// `marker` (what ReplaceFolder would refuse to replace): to check before the work starts.
+void CheckReplaceable(const std::string& target, const std::string& marker);
+
+// Moves the complete folder `tmp` into place as `target`. An existing `target` is replaced only
+// when it is empty or holds `marker` (a file the tool writes into every output folder of its
+// own); otherwise `tmp` is removed and dps::Error says that `target` was left alone.
+void ReplaceFolder(const std::string& tmp, const std::string& target, const std::string& marker);
 
 // A text output stream that becomes visible under its final name only on Commit(). Destroying an
 // uncommitted file removes the temporary.
