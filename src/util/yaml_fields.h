@@ -24,8 +24,13 @@ inline std::string OneLine(const cv::Exception& e) {
   return msg;
 }
 
+// Throws dps::Error naming the file when OpenCV's parser does not finish on it within `seconds`
+// (tried in a child process that is then killed): some malformed files make it loop forever.
+void RequireParserFinishes(const std::string& path, double seconds = 10.0);
+
 inline cv::FileStorage OpenForReading(const std::string& path) {
   if (!std::filesystem::exists(path)) throw Error(Str(path, ": file not found"));
+  RequireParserFinishes(path);
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ);
