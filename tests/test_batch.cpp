@@ -144,6 +144,16 @@ void TestOutputsNeverDestroyInputs(const std::string& drive) {
   CHECK_EQ(s.drive, d.filename().string());
   CHECK(fs::exists(kTmp / "results" / "other" / "keep.txt"));
   CHECK(fs::exists(kTmp / "results" / d.filename() / "summary.json"));
+  // A killed run's temporary folder (its process gone) is removed by the next run; a running
+  // process's is kept.
+  const fs::path stale = kTmp / "results" / ("." + d.filename().string() + ".tmp-2147483646");
+  const fs::path live = kTmp / "results" / ("." + d.filename().string() + ".tmp-1");
+  fs::create_directories(stale);
+  fs::create_directories(live);
+  dps::ProcessDrive(drive, (kTmp / "results").string(), o);
+  CHECK(!fs::exists(stale));
+  CHECK(fs::exists(live));  // pid 1 runs
+  fs::remove_all(live);
   // A folder of that name that dps did not write is left alone, before any work.
   fs::create_directories(kTmp / "results2" / d.filename());
   std::ofstream(kTmp / "results2" / d.filename() / "notes.txt") << "mine\n";

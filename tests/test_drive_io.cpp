@@ -13,6 +13,7 @@
 #include "fixtures.h"
 #include "dps/detect/detection_io.h"
 #include "dps/pipeline/drive_io.h"
+#include "dps/synth/truth_io.h"
 #include "dps/pipeline/drive_processing.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
@@ -60,6 +61,12 @@ void TestCanLogs() {
   CHECK_THROWS_WITH(dps::ReadFrameTimes(Write("frames.csv", "frame,t\n0,0\n1,inf\n")), dps::Error, "no finite time");
   CHECK_THROWS_WITH(dps::ReadFrameTimes(Write("frames.csv", "frame,t\n0,0\n1,0\n")), dps::Error, "does not come after");
   CHECK_THROWS_WITH(dps::ReadFrameTimes(Write("frames.csv", "frame,t\n0,1\n1,0.5\n")), dps::Error, "does not come after");
+  // Whole numbers out of int's range are errors naming the cell, not undefined casts.
+  CHECK_THROWS_WITH(dps::ReadTruth(Write("truth.csv", "frame,t,id,kind,x,z,heading_deg,length,width,height,vx,vz\n1e300,0,1,car,0,5,0,4,2,1.5,0,0\n")),
+                    dps::Error, "truth.csv:2: column 'frame': '1e300' is not a whole number in range");
+  CHECK_THROWS_WITH(dps::ReadDetections(Write("det.csv", "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n"
+                                                         "0,0,front,nan,1,5,5,0,2,4,6,10\n")),
+                    dps::Error, "det.csv:2: column 'id'");
   // Units and names of another log: km/h and deg/s.
   dps::CanLogFormat f;
   f.time_column = "time";

@@ -234,6 +234,11 @@ void TestBadOptions() {
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.block_height = 1; })), dps::Error, "block_height");
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.num_disparities = 1; })), dps::Error,
                     "num_disparities = 1");
+  // Values whose column arithmetic would overflow int (dps-stereo --num-disparities 2147483647).
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.num_disparities = 2147483647; })), dps::Error,
+                    "num_disparities");
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.min_disparity = -2147483647; })), dps::Error,
+                    "min_disparity");
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.uniqueness_ratio = 101; })), dps::Error,
                     "uniqueness_ratio");
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.log_sigma_px = 0; })), dps::Error, "log_sigma_px");

@@ -269,7 +269,8 @@ void TestErrors() {
       {"camera,line,u,v\nleft,1,10,10\n", "missing column 'axis'"},
       {"camera,line,axis,u,v\nleft,1,W,10,10\n", "column 'axis': expected X, Y or Z"},
       {"camera,line,axis,u,v\nleft,1,X,ten,10\n", ":2: column 'u': 'ten' is not a number"},
-      {"camera,line,axis,u,v\nleft,1.5,X,10,10\n", "column 'line': expected an integer"},
+      {"camera,line,axis,u,v\nleft,1.5,X,10,10\n", "column 'line': '1.5' is not a whole number"},
+      {"camera,line,axis,u,v\nleft,1e300,X,10,10\n", ":2: column 'line': '1e300' is not a whole number in range"},
       {"camera,line,axis,u,v\nleft,1,X,10\n", ":2: 4 fields, the header has 5"},
   };
   int i = 0;

@@ -16,9 +16,7 @@ std::vector<Mark> ReadMarks(const std::string& path) {
   for (size_t r = 0; r < t.rows(); ++r) {
     Mark m;
     m.camera = t.Text(r, camera);
-    const double id = t.Number(r, line);
-    if (id != std::floor(id)) throw Error(Str(path, ":", t.Line(r), ": column 'line': expected an integer"));
-    m.line = static_cast<int>(id);
+    m.line = t.Integer(r, line);
     const std::string& a = t.Text(r, axis);
     if (a != "X" && a != "Y" && a != "Z") {
       throw Error(Str(path, ":", t.Line(r), ": column 'axis': expected X, Y or Z, got '", a, "'"));

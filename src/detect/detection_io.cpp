@@ -27,10 +27,10 @@ std::vector<Detection> ReadDetections(const std::string& path) {
   std::vector<Detection> out;
   for (size_t r = 0; r < t.rows(); ++r) {
     Detection d;
-    d.frame = static_cast<int>(t.Number(r, frame));
+    d.frame = t.Integer(r, frame);
     d.t_s = t.Number(r, time);
     d.source = t.Text(r, source);
-    d.id = static_cast<int>(t.Number(r, id));
+    d.id = t.Integer(r, id);
     d.x_m = t.Number(r, x);
     d.z_m = t.Number(r, z);
     d.range_m = t.Number(r, range);
@@ -38,7 +38,7 @@ std::vector<Detection> ReadDetections(const std::string& path) {
     d.x_max_m = t.Number(r, x_max);
     d.z_min_m = t.Number(r, z_min);
     d.z_max_m = t.Number(r, z_max);
-    d.n_points = static_cast<int>(t.Number(r, n));
+    d.n_points = t.Integer(r, n);
     out.push_back(d);
   }
   return out;

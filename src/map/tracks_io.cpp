@@ -25,16 +25,16 @@ std::vector<TrackState> ReadTracks(const std::string& path) {
   std::vector<TrackState> out;
   for (size_t r = 0; r < t.rows(); ++r) {
     TrackState s;
-    s.frame = static_cast<int>(t.Number(r, frame));
+    s.frame = t.Integer(r, frame);
     s.t_s = t.Number(r, time);
-    s.id = static_cast<int>(t.Number(r, id));
+    s.id = t.Integer(r, id);
     s.x_m = t.Number(r, x);
     s.z_m = t.Number(r, z);
     s.vx_mps = t.Number(r, vx);
     s.vz_mps = t.Number(r, vz);
     s.sigma_x_m = t.Number(r, sx);
     s.sigma_z_m = t.Number(r, sz);
-    s.age = static_cast<int>(t.Number(r, age));
+    s.age = t.Integer(r, age);
     s.confirmed = true;
     out.push_back(s);
   }

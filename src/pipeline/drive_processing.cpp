@@ -414,7 +414,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   AttachMasks(drive_dir, o, &in, &s);
   // Outputs under a temporary name.
   fs::create_directories(out_root);
-  const fs::path tmp = fs::path(out_root) / Str(".", s.drive, ".tmp-", ::getpid());
+  const fs::path tmp = TemporaryFolderFor(s.output_dir);  // (and killed runs' ones removed)
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   try {

@@ -105,7 +105,9 @@ StereoOptions DetectionStereoOptions() {
 
 void StereoOptions::Check() const {
   const OptionCheck Require("stereo");
-  Require(num_disparities >= 2, "num_disparities", num_disparities, ">= 2");
+  // Bounded so that the column arithmetic cannot overflow (no image is that wide).
+  Require(num_disparities >= 2 && num_disparities <= 16384, "num_disparities", num_disparities, "2..16384");
+  Require(std::abs(min_disparity) <= 16384, "min_disparity", min_disparity, "-16384..16384");
   Require(block_width % 2 == 1 && block_width >= 3 && block_width <= 31, "block_width", block_width,
           "odd and 3..31");
   Require(block_height % 2 == 1 && block_height >= 3 && block_height <= 31, "block_height",

@@ -253,7 +253,7 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
   if (calibration && !options.processing_rig) scene.rig = PerturbedRig(scene_in);
   const int frames = options.frames > 0 ? options.frames : scene.FrameCount();
   if (out.has_parent_path() && !out.parent_path().empty()) fs::create_directories(out.parent_path());
-  const fs::path tmp = out.parent_path() / Str(".", out.filename().string(), ".tmp-", ::getpid());
+  const fs::path tmp = TemporaryFolderFor(out.string());  // (and killed runs' ones removed)
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   try {

@@ -24,7 +24,7 @@ std::vector<TruthRow> ReadTruth(const std::string& path) {
   const int vx = t.Column("vx"), vz = t.Column("vz");
   std::vector<TruthRow> out;
   for (size_t r = 0; r < t.rows(); ++r) {
-    out.push_back({static_cast<int>(t.Number(r, frame)), t.Number(r, time), static_cast<int>(t.Number(r, id)),
+    out.push_back({t.Integer(r, frame), t.Number(r, time), t.Integer(r, id),
                    t.Text(r, kind), t.Number(r, x), t.Number(r, z), t.Number(r, heading), t.Number(r, length),
                    t.Number(r, width), t.Number(r, height), t.Number(r, vx), t.Number(r, vz)});
   }

@@ -1,10 +1,12 @@
 #include "dps/util/atomic_file.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -83,6 +85,26 @@ void ReplaceFolder(const std::string& tmp, const std::string& target, const std:
   }
   if (fs::exists(target)) fs::remove_all(target);
   fs::rename(tmp, target);
+}
+
+std::string TemporaryFolderFor(const std::string& target) {
+  namespace fs = std::filesystem;
+  const fs::path t(AbsolutePath(target));
+  const fs::path parent = t.parent_path();
+  const std::string prefix = "." + t.filename().string() + ".tmp-";
+  std::error_code ec;
+  for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string pid_text = name.substr(prefix.size());
+    if (pid_text.empty() || pid_text.find_first_not_of("0123456789") != std::string::npos) continue;
+    const long pid = std::strtol(pid_text.c_str(), nullptr, 10);
+    // A run still going (or another user's) keeps its folder.
+    if (pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    std::error_code remove_ec;
+    fs::remove_all(it->path(), remove_ec);
+  }
+  return (parent / (prefix + std::to_string(::getpid()))).string();
 }
 
 void WriteFileAtomically(const std::string& path, const std::string& content) {

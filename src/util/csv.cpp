@@ -1,7 +1,9 @@
 #include "dps/util/csv.h"
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 
 #include "dps/util/error.h"
 
@@ -72,6 +74,15 @@ double CsvTable::Number(size_t row, int column) const {
                     "' is not a number"));
   }
   return v;
+}
+
+int CsvTable::Integer(size_t row, int column) const {
+  const double v = Number(row, column);
+  if (!(v >= std::numeric_limits<int>::min() && v <= std::numeric_limits<int>::max()) || v != std::floor(v)) {
+    throw Error(Str(path_, ":", Line(row), ": column '", header_[column], "': '", cells_[row][column],
+                    "' is not a whole number in range"));
+  }
+  return static_cast<int>(v);
 }
 
 }  // namespace dps

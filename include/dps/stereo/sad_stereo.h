@@ -42,8 +42,8 @@ namespace dps {
 constexpr float kInvalidDisparity = std::numeric_limits<float>::infinity();
 
 struct StereoOptions {
-  int min_disparity = 0;        // smallest disparity searched, px; negative for motion stereo
-  int num_disparities = 64;     // number of disparities searched, >= 2
+  int min_disparity = 0;        // smallest disparity searched, px; negative for motion stereo; |d| <= 16384
+  int num_disparities = 64;     // number of disparities searched, 2..16384
   int block_width = 9;          // SAD window, px; odd, 3..31
   int block_height = 9;         // odd, 3..31
   double log_sigma_px = 1.0;    // Gaussian of the LoG prefilter, px; > 0

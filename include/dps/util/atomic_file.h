@@ -37,6 +37,10 @@ void CheckReplaceable(const std::string& target, const std::string& marker);
 // own); otherwise `tmp` is removed and dps::Error says that `target` was left alone.
 void ReplaceFolder(const std::string& tmp, const std::string& target, const std::string& marker);
 
+// The temporary folder beside `target` that a process builds it in: "<parent>/.<name>.tmp-<pid>".
+// Folders of that pattern left by processes that no longer run (killed runs) are removed first.
+std::string TemporaryFolderFor(const std::string& target);
+
 // A text output stream that becomes visible under its final name only on Commit(). Destroying an
 // uncommitted file removes the temporary.
 class AtomicOutputFile {

@@ -21,6 +21,9 @@ class CsvTable {
   const std::string& Text(size_t row, int column) const { return cells_[row][column]; }
   // A cell as a number; throws dps::Error "file:line: column 'x': 'abc' is not a number".
   double Number(size_t row, int column) const;
+  // A cell as a whole number within int's range; throws dps::Error naming file, line and column
+  // otherwise (a frame number of 1e300 or 2.5).
+  int Integer(size_t row, int column) const;
   // The file's line number of a data row (for messages).
   int Line(size_t row) const { return static_cast<int>(row) + 2; }
   const std::string& path() const { return path_; }
