@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/core/utils/logger.hpp>
+
 #include "dps/util/error.h"
 
 namespace dps_cli {
@@ -80,6 +82,9 @@ class Args {
 // Runs a tool's body, printing any error as one line "tool: error: message" and returning 1.
 template <typename Body>
 int Run(const char* tool, Body&& body) {
+  // The tools report what went wrong themselves, in one line; OpenCV's warnings (e.g. imread's on a
+  // missing file) would add lines before it.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
   try {
     return body();
   } catch (const std::exception& e) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -28,6 +29,7 @@ cv::Mat CameraValidMask(const RigCamera& camera) {
 }
 
 cv::Mat ReadCameraMask(const std::string& path, const CameraModel& model) {
+  if (!std::filesystem::is_regular_file(path)) throw Error(Str(path, ": cannot read the mask image (no such file)"));
   const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
   if (image.empty()) throw Error(Str(path, ": cannot read the mask image"));
   if (image.cols != model.width() || image.rows != model.height()) {

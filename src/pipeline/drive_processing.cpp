@@ -117,13 +117,17 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
 }
 
 // A camera's first frames, over the drive's first `seconds`.
-std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const std::string& camera, const DriveInput& in,
+std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& camera, const DriveInput& in,
                                  double seconds) {
-  std::unique_ptr<FrameSource> source = FrameSource::Open(drive_dir, camera);
+  std::unique_ptr<FrameSource> source = FrameSource::Open(drive_dir, camera.name);
   std::vector<cv::Mat> frames;
   cv::Mat image;
   for (int i = 0; i < in.frames && (i == 0 || in.times[i] - in.times[0] <= seconds); ++i) {
     if (!source->Read(&image)) break;
+    if (image.cols != camera.model.width() || image.rows != camera.model.height()) {
+      throw Error(Str(drive_dir, ": frame ", i, ": ", camera.name, " is ", image.cols, "x", image.rows,
+                      " but rig.yaml's camera is ", camera.model.width(), "x", camera.model.height()));
+    }
     frames.push_back(image.clone());
   }
   if (frames.empty()) throw Error(Str(drive_dir, ": ", source->description(), " has no frame to estimate its mask from"));
@@ -143,7 +147,7 @@ void AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput
     } else if (!camera.mask.empty()) {
       m.source = "rig.yaml";
     } else if (o.estimate_masks && in->frames > 0) {
-      camera.mask = EstimateFieldMask(FirstFrames(drive_dir, camera.name, *in, o.mask_estimate_s), camera.model,
+      camera.mask = EstimateFieldMask(FirstFrames(drive_dir, camera, *in, o.mask_estimate_s), camera.model,
                                       o.field_mask);
       m.source = "estimated";
     } else {
