@@ -231,8 +231,18 @@ void TestOpenCVReaders() {
     out << "D" << cv::Mat(cv::Matx14d(-0.2, 0.05, 0, 0));
     out << "xi" << 1.1;
   }
-  CHECK_THROWS_WITH(dps::ReadOpenCVOmnidir((kTmp / "omnidir_d.yaml").string(), {800, 600}),
-                    dps::Error, "not supported");
+  // With distortion: read as the unified model's [k1 k2 p1 p2], written back to rig.yaml and read
+  // again unchanged.
+  const dps::CameraModel distorted = dps::ReadOpenCVOmnidir((kTmp / "omnidir_d.yaml").string(), {800, 600});
+  CHECK_NEAR(distorted.dist()[0], -0.2, 0);
+  CHECK_NEAR(distorted.dist()[1], 0.05, 0);
+  dps::Rig with_dist;
+  dps::Pose identity;
+  with_dist.cameras.push_back({"left", distorted, identity, cv::Mat(), ""});
+  dps::WriteRig(with_dist, (kTmp / "rig_dist.yaml").string());
+  const dps::CameraModel back = dps::ReadRig((kTmp / "rig_dist.yaml").string()).Camera("left").model;
+  CHECK(back.dist() == distorted.dist());
+  CHECK(back.type() == dps::CameraModelType::kUnified);
   {
     cv::FileStorage out((kTmp / "omnidir_nosize.yaml").string(), cv::FileStorage::WRITE);
     out << "K" << cv::Mat(cv::Matx33d(400, 0, 401, 0, 402, 299, 0, 0, 1));

@@ -90,11 +90,66 @@ CameraModel CameraModel::Hyperbolic(int width, int height, const Eigen::Matrix3d
 }
 
 CameraModel CameraModel::Unified(int width, int height, const Eigen::Matrix3d& K, double xi,
-                                 double rim_radius_px) {
+                                 double rim_radius_px, const std::array<double, 4>& dist) {
   Require(xi >= 0.0 && std::isfinite(xi), "xi", xi, "finite and xi >= 0");
+  for (int i = 0; i < 4; ++i) {
+    Require(std::isfinite(dist[i]), Str("dist[", i, "] (", i < 2 ? "k" : "p", i % 2 + 1, ")"), dist[i], "finite");
+  }
   CameraModel m = Hyperbolic(width, height, K, 1.0, xi, rim_radius_px);
   m.type_ = CameraModelType::kUnified;
+  m.dist_ = dist;
+  if (dist != std::array<double, 4>{0, 0, 0, 0}) {
+    // The radial factor r (1 + k1 r^2 + k2 r^4) grows while 1 + 3 k1 r^2 + 5 k2 r^4 > 0; the
+    // normalised radius never exceeds 1 / (1 - xi) for xi < 1 (the ray at 180 degrees), or grows
+    // without bound for xi >= 1. Search up to the first turn, or a radius no camera reaches.
+    const double limit = xi < 1.0 ? 1.0 / (1.0 - xi) : 1e3;
+    constexpr int kSteps = 100000;
+    double r_max = limit;
+    for (int i = 1; i <= kSteps; ++i) {
+      const double r = limit * i / kSteps, r2 = r * r;
+      if (1.0 + 3.0 * dist[0] * r2 + 5.0 * dist[1] * r2 * r2 <= 0.0) {
+        r_max = limit * (i - 1) / kSteps;
+        break;
+      }
+    }
+    Require(r_max > 0.0, "dist[0] (k1)", dist[0], "a distortion that grows near the axis");
+    m.max_r2_ = r_max * r_max;
+  }
   return m;
+}
+
+Eigen::Vector2d CameraModel::Distort(const Eigen::Vector2d& m) const {
+  const double k1 = dist_[0], k2 = dist_[1], p1 = dist_[2], p2 = dist_[3];
+  const double x = m.x(), y = m.y(), r2 = x * x + y * y;
+  const double radial = 1.0 + k1 * r2 + k2 * r2 * r2;
+  return {x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+          y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
+}
+
+bool CameraModel::Undistort(const Eigen::Vector2d& md, Eigen::Vector2d* m) const {
+  // Newton's method on Distort(m) = md from m = md, with the analytic Jacobian.
+  const double k1 = dist_[0], k2 = dist_[1], p1 = dist_[2], p2 = dist_[3];
+  Eigen::Vector2d x = md;
+  for (int it = 0; it < 50; ++it) {
+    const Eigen::Vector2d f = Distort(x) - md;
+    if (f.norm() < 1e-12) {
+      if (x.squaredNorm() > max_r2_) return false;
+      *m = x;
+      return true;
+    }
+    const double u = x.x(), v = x.y(), r2 = u * u + v * v;
+    const double radial = 1.0 + k1 * r2 + k2 * r2 * r2, dradial = 2.0 * k1 + 4.0 * k2 * r2;  // d radial / d(r2)
+    Eigen::Matrix2d J;
+    J(0, 0) = radial + u * dradial * 2.0 * u + 2.0 * p1 * v + p2 * 6.0 * u;
+    J(0, 1) = u * dradial * 2.0 * v + 2.0 * p1 * u + p2 * 2.0 * v;
+    J(1, 0) = v * dradial * 2.0 * u + p1 * 2.0 * u + 2.0 * p2 * v;
+    J(1, 1) = radial + v * dradial * 2.0 * v + p1 * 6.0 * v + 2.0 * p2 * u;
+    const double det = J.determinant();
+    if (!(std::abs(det) > 1e-12)) return false;
+    x -= J.inverse() * f;
+    if (!x.allFinite()) return false;
+  }
+  return false;
 }
 
 CameraModel CameraModel::Fisheye(int width, int height, const Eigen::Matrix3d& K,
@@ -159,6 +214,12 @@ bool CameraModel::Project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) cons
     if (!(denom > 0.0)) return false;
     mx = p.x() / denom;
     my = p.y() / denom;
+    if (Distorted()) {
+      if (mx * mx + my * my > max_r2_) return false;
+      const Eigen::Vector2d d = Distort({mx, my});
+      mx = d.x();
+      my = d.y();
+    }
   }
   const Eigen::Vector2d out(K_(0, 0) * mx + K_(0, 1) * my + K_(0, 2), K_(1, 1) * my + K_(1, 2));
   if (!InsideRim(out)) return false;
@@ -168,8 +229,14 @@ bool CameraModel::Project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) cons
 
 bool CameraModel::Unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
   if (!InsideRim(pixel)) return false;
-  const double my = (pixel.y() - K_(1, 2)) * K_inv_(1, 1);
-  const double mx = (pixel.x() - K_(0, 2) - K_(0, 1) * my) / K_(0, 0);
+  double my = (pixel.y() - K_(1, 2)) * K_inv_(1, 1);
+  double mx = (pixel.x() - K_(0, 2) - K_(0, 1) * my) / K_(0, 0);
+  if (Distorted()) {
+    Eigen::Vector2d m;
+    if (!Undistort({mx, my}, &m)) return false;
+    mx = m.x();
+    my = m.y();
+  }
   const double rho2 = mx * mx + my * my;
   if (type_ == CameraModelType::kFisheye) {
     const double theta_d = std::sqrt(rho2);
@@ -223,6 +290,9 @@ CameraModel UnifiedToHyperbolic(const CameraModel& u, double a) {
   if (u.type() != CameraModelType::kUnified) {
     throw std::invalid_argument("UnifiedToHyperbolic: model is " + ModelName(u.type()));
   }
+  if (u.dist() != std::array<double, 4>{0, 0, 0, 0}) {
+    throw std::invalid_argument("UnifiedToHyperbolic: the unified model has distortion, which no mirror model has");
+  }
   const Eigen::Matrix3d K = u.K() * Eigen::Vector3d(a, a, 1.0).asDiagonal();
   return CameraModel::Hyperbolic(u.width(), u.height(), K, a, u.xi() * a, u.rim_radius_px());
 }
@@ -239,7 +309,7 @@ CameraModel ResizeCameraModel(const CameraModel& m, int width, int height) {
   const double rim = m.rim_radius_px() * std::min(sx, sy);
   switch (m.type()) {
     case CameraModelType::kHyperbolic: return CameraModel::Hyperbolic(width, height, K, m.a(), m.b(), rim);
-    case CameraModelType::kUnified: return CameraModel::Unified(width, height, K, m.xi(), rim);
+    case CameraModelType::kUnified: return CameraModel::Unified(width, height, K, m.xi(), rim, m.dist());
     case CameraModelType::kFisheye: return CameraModel::Fisheye(width, height, K, m.dist(), rim);
   }
   throw std::invalid_argument("ResizeCameraModel: unknown model type");

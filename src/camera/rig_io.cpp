@@ -48,7 +48,12 @@ CameraModel ReadIntrinsics(const FieldReader& f) {
     }
     case CameraModelType::kUnified: {
       const double xi = f.Number("xi");
-      return MakeModel(f.where(), [&] { return CameraModel::Unified(width, height, K, xi, rim); });
+      std::array<double, 4> dist{0, 0, 0, 0};
+      if (f.Has("dist")) {
+        const Eigen::MatrixXd d = f.Matrix("dist", 4, 1);
+        dist = {d(0), d(1), d(2), d(3)};
+      }
+      return MakeModel(f.where(), [&] { return CameraModel::Unified(width, height, K, xi, rim, dist); });
     }
     case CameraModelType::kFisheye: {
       const Eigen::MatrixXd d = f.Matrix("dist", 4, 1);
@@ -151,7 +156,14 @@ std::string RigToYaml(const Rig& rig) {
     WriteMatrix(fs, "K", m.K());
     switch (m.type()) {
       case CameraModelType::kHyperbolic: fs << "a" << m.a() << "b" << m.b(); break;
-      case CameraModelType::kUnified: fs << "xi" << m.xi(); break;
+      case CameraModelType::kUnified:
+        fs << "xi" << m.xi();
+        if (m.dist() != std::array<double, 4>{0, 0, 0, 0}) {
+          fs << "dist" << "[:";
+          for (double k : m.dist()) fs << k;
+          fs << "]";
+        }
+        break;
       case CameraModelType::kFisheye:
         fs << "dist" << "[:";
         for (double k : m.dist()) fs << k;
@@ -190,18 +202,13 @@ CameraModel ReadOpenCVOmnidir(const std::string& path, cv::Size size) {
   const std::string xi_key = "xi";
   const double xi = f.Required(xi_key).isMap() ? f.Matrix(xi_key, 1, 1)(0) : f.Number(xi_key);
   const std::string d_key = FirstPresent(f, {"D", "distortion_coefficients"});
+  std::array<double, 4> dist{0, 0, 0, 0};
   if (f.Has(d_key)) {
     const Eigen::MatrixXd d = f.Matrix(d_key, 1, 4);
-    for (int i = 0; i < 4; ++i) {
-      if (std::abs(d(i)) > 1e-9) {
-        f.Fail(d_key, Str("distortion D = [", d(0), ", ", d(1), ", ", d(2), ", ", d(3),
-                          "] is not supported: dps's unified model has no distortion (recalibrate "
-                          "with cv::omnidir::CALIB_FIX_K1 | K2 | P1 | P2)"));
-      }
-    }
+    dist = {d(0), d(1), d(2), d(3)};
   }
   const cv::Size s = ReadImageSize(f, size);
-  return MakeModel(path, [&] { return CameraModel::Unified(s.width, s.height, K, xi); });
+  return MakeModel(path, [&] { return CameraModel::Unified(s.width, s.height, K, xi, 0.0, dist); });
 }
 
 }  // namespace dps

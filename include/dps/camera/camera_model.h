@@ -15,8 +15,14 @@
 //       [u v 1]^T ~ K [X, Y, a Z + b sqrt(X^2 + Y^2 + Z^2)]^T,  a > 0, b >= 0.
 //   The inverse (eq. 4) as printed in the paper is exact only when a^2 - b^2 = 1; Unproject solves
 //   the general quadratic (see camera_model.cpp and docs/camera_models.md).
-// - unified (Mei / Geyer, as cv::omnidir without distortion): the hyperbolic model with a = 1,
-//   b = xi. A hyperbolic (K, a, b) equals a unified (K diag(1/a, 1/a, 1), xi = b / a).
+// - unified (Mei / Geyer, exactly as cv::omnidir): the hyperbolic model with a = 1, b = xi, and
+//   optional distortion dist = [k1 k2 p1 p2] of the normalised point m = (X, Y) / (Z + xi r):
+//       m_d = m (1 + k1 r^2 + k2 r^4) + [2 p1 mx my + p2 (r^2 + 2 mx^2), p1 (r^2 + 2 my^2) + 2 p2 mx my],
+//   r = |m|, then [u v 1]^T = K [m_d, 1]^T. Rays are valid up to the largest r at which the
+//   radial factor r (1 + k1 r^2 + k2 r^4) still grows; Unproject inverts the distortion by
+//   Newton's method and reports no ray where it does not converge to 1e-12 (beyond that radius, or
+//   where the tangential terms fold the image). Without distortion, a hyperbolic (K, a, b) equals a
+//   unified (K diag(1/a, 1/a, 1), xi = b / a).
 // - fisheye (Kannala–Brandt, as cv::fisheye): theta = angle of the ray to +Z,
 //       theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8),
 //       [u v 1]^T = K [theta_d cos(phi), theta_d sin(phi), 1]^T;  all k = 0 is equidistant.
@@ -49,9 +55,10 @@ class CameraModel {
   // K(1,0) = K(2,0) = K(2,1) = 0, K(2,2) = 1. a > 0, b >= 0. rim_radius_px >= 0 (0 = no rim).
   static CameraModel Hyperbolic(int width, int height, const Eigen::Matrix3d& K, double a,
                                 double b, double rim_radius_px = 0.0);
-  // Unified (Mei) model, xi >= 0. Same constraints on the other arguments as Hyperbolic.
+  // Unified (Mei) model, xi >= 0, dist = [k1 k2 p1 p2] (finite; all 0 = none). Same constraints on
+  // the other arguments as Hyperbolic.
   static CameraModel Unified(int width, int height, const Eigen::Matrix3d& K, double xi,
-                             double rim_radius_px = 0.0);
+                             double rim_radius_px = 0.0, const std::array<double, 4>& dist = {0, 0, 0, 0});
   // Kannala–Brandt fisheye, dist = [k1 k2 k3 k4] (finite; k1 > -1/3 so that the lens is
   // monotonic near the axis). Same constraints on the other arguments as Hyperbolic.
   static CameraModel Fisheye(int width, int height, const Eigen::Matrix3d& K,
@@ -77,6 +84,7 @@ class CameraModel {
   double a() const { return a_; }
   double b() const { return b_; }
   double xi() const { return b_ / a_; }
+  // fisheye: [k1 k2 k3 k4]; unified: [k1 k2 p1 p2] (zeros: none); hyperbolic: zeros.
   const std::array<double, 4>& dist() const { return dist_; }
   double rim_radius_px() const { return rim_radius_px_; }
   // Largest valid angle between a ray and +Z, radians (fisheye: monotonic range; others: from
@@ -99,6 +107,10 @@ class CameraModel {
   double rim_radius_px_ = 0.0;
   double max_theta_rad_ = 0.0;
   double max_theta_d_ = 0.0;  // fisheye: theta_d at max_theta_rad_
+  double max_r2_ = 0.0;       // unified with distortion: largest squared undistorted radius, else 0
+  bool Distorted() const { return type_ == CameraModelType::kUnified && max_r2_ > 0.0; }
+  Eigen::Vector2d Distort(const Eigen::Vector2d& m) const;
+  bool Undistort(const Eigen::Vector2d& md, Eigen::Vector2d* m) const;
 };
 
 // The unified model that gives the same pixels as a hyperbolic one: xi = b / a,

@@ -2,7 +2,7 @@
 // calibration files (cv::fisheye, cv::omnidir), so that users can bring what they already have.
 //
 // rig.yaml, per camera: name, model (hyperbolic | unified | fisheye), width, height, K (3x3),
-// a and b (hyperbolic), xi (unified), dist [k1, k2, k3, k4] (fisheye), R (3x3, camera -> vehicle,
+// a and b (hyperbolic), xi and optionally dist [k1, k2, p1, p2] (unified), dist [k1, k2, k3, k4] (fisheye), R (3x3, camera -> vehicle,
 // orthonormal within 1e-6, det +1), t (3x1, metres, vehicle frame), and optionally rim_radius_px
 // (pixels around the principal point that see the scene; 0 or absent = no rim) and mask (an 8-bit
 // image of the camera's size, 255 = sees the world, relative to the rig file's folder; ReadRig
@@ -41,8 +41,7 @@ void WriteRig(const Rig& rig, const std::string& path);
 CameraModel ReadOpenCVFisheye(const std::string& path, cv::Size size = cv::Size());
 
 // Reads a cv::omnidir calibration result (`K` or `camera_matrix`, `xi`, `D` or
-// `distortion_coefficients`) as a unified model. dps's unified model has no distortion, so D must
-// be absent or all zero (|D_i| <= 1e-9); otherwise a dps::Error says so.
+// `distortion_coefficients` = [k1 k2 p1 p2], optional) as a unified model with that distortion.
 CameraModel ReadOpenCVOmnidir(const std::string& path, cv::Size size = cv::Size());
 
 }  // namespace dps
