@@ -243,21 +243,30 @@ void WindowValidInto(const cv::Mat& valid, const StereoOptions& o, cv::Mat& out)
   cv::erode(valid, out, kernel, cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(255));
 }
 
-// The image with its invalid pixels replaced by a smooth extension of the valid ones (normalised
-// convolution), so that the prefilter sees no edge where the valid area ends.
-void FillInvalid(const cv::Mat& grey, const cv::Mat& valid, cv::Mat* scratch, cv::Mat& out) {
-  cv::Mat &weight = scratch[0], &sum = scratch[1];
-  valid.convertTo(weight, CV_32F, 1.0 / 255.0);
-  grey.convertTo(sum, CV_32F);
-  sum = sum.mul(weight);
-  const double sigma = 0.02 * std::max(grey.cols, grey.rows) + 2.0;
-  cv::GaussianBlur(sum, sum, cv::Size(), sigma, sigma, cv::BORDER_REPLICATE);
-  cv::GaussianBlur(weight, weight, cv::Size(), sigma, sigma, cv::BORDER_REPLICATE);
-  cv::divide(sum, cv::max(weight, 1e-3), sum);
-  grey.copyTo(out);
-  cv::Mat filled;
-  sum.convertTo(filled, CV_8U);
-  filled.copyTo(out, valid == 0);
+// For every pixel the nearest valid pixel (CV_32FC2 coordinates for cv::remap; a valid pixel maps
+// to itself): the invalid area then takes the values of the valid area's edge, so that the
+// prefilter finds no edge where the valid area ends.
+cv::Mat NearestValidMap(const cv::Mat& valid) {
+  cv::Mat distance, labels;
+  // Labels of the zero pixels (the valid ones here) in raster order, and for every pixel the label
+  // of the nearest one.
+  cv::distanceTransform(valid == 0, distance, labels, cv::DIST_L2, cv::DIST_MASK_5, cv::DIST_LABEL_PIXEL);
+  std::vector<cv::Vec2f> at(1);
+  for (int y = 0; y < valid.rows; ++y) {
+    const std::uint8_t* v = valid.ptr<std::uint8_t>(y);
+    for (int x = 0; x < valid.cols; ++x) {
+      if (v[x]) at.emplace_back(static_cast<float>(x), static_cast<float>(y));
+    }
+  }
+  cv::Mat map(valid.size(), CV_32FC2);
+  for (int y = 0; y < valid.rows; ++y) {
+    const int* l = labels.ptr<int>(y);
+    cv::Vec2f* m = map.ptr<cv::Vec2f>(y);
+    for (int x = 0; x < valid.cols; ++x) {
+      m[x] = l[x] > 0 && l[x] < static_cast<int>(at.size()) ? at[l[x]] : cv::Vec2f(static_cast<float>(x), static_cast<float>(y));
+    }
+  }
+  return map;
 }
 
 // Validity at half resolution: a coarse pixel is valid when every fine pixel under cv::pyrDown's
@@ -431,15 +440,34 @@ void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view, const c
     throw Error(Str("stereo: the validity mask (", valid.cols, "x", valid.rows,
                     ") must be 8-bit and of the image's size (", grey.cols, "x", grey.rows, ")"));
   }
+  // What the mask implies, derived once per mask.
+  const bool new_mask = !valid.empty() && (valid.data != view->mask_seen.data || valid.size() != view->mask_seen.size());
+  if (valid.empty()) {
+    view->mask_seen.release();
+    view->mask_has_invalid = false;
+    for (cv::Mat& v : view->window_valid) v.release();
+  } else if (new_mask) {
+    view->mask_seen = valid;
+    view->mask_has_invalid = cv::countNonZero(valid) < static_cast<int>(valid.total());
+    for (cv::Mat& v : view->window_valid) v.release();
+    view->fill_map.release();
+    if (view->mask_has_invalid) {
+      view->fill_map = NearestValidMap(valid);
+      WindowValidInto(valid, o, view->window_valid[0]);
+      if (o.two_levels) {
+        cv::Mat coarse;
+        HalveValidity(valid, cv::Size((valid.cols + 1) / 2, (valid.rows + 1) / 2), view->scratch[0], coarse);
+        WindowValidInto(coarse, o, view->window_valid[1]);
+      }
+    }
+  }
   cv::Mat filled;
-  if (!valid.empty() && cv::countNonZero(valid) < static_cast<int>(valid.total())) {
-    FillInvalid(grey, valid, view->scratch, filled);
+  if (view->mask_has_invalid) {
+    cv::remap(grey, filled, view->fill_map, cv::noArray(), cv::INTER_NEAREST);
     grey = filled;
   }
   LogPrefilterInto(grey, o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[0]);
   TextureMaskInto(view->log[0], o, view->scratch[0], view->textured[0]);
-  for (cv::Mat& v : view->window_valid) v.release();
-  if (!valid.empty()) WindowValidInto(valid, o, view->window_valid[0]);
   if (!o.two_levels) {
     view->log[1].release();
     view->textured[1].release();
@@ -448,11 +476,6 @@ void SadStereoMatcher::Prepare(const cv::Mat& image, PreparedView* view, const c
   cv::pyrDown(grey, view->scratch[3]);
   LogPrefilterInto(view->scratch[3], o.log_sigma_px, o.prefilter_gain, o.prefilter_cap, view->scratch, view->log[1]);
   TextureMaskInto(view->log[1], o, view->scratch[0], view->textured[1]);
-  if (!valid.empty()) {
-    cv::Mat& coarse = view->scratch[3];
-    HalveValidity(valid, view->log[1].size(), view->scratch[0], coarse);
-    WindowValidInto(coarse, o, view->window_valid[1]);
-  }
 }
 
 void SadStereoMatcher::Mirror(const PreparedView& view, PreparedView* mirrored) {

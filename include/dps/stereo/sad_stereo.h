@@ -23,7 +23,8 @@
 // 4. Two levels: the same search on half-resolution images fills pixels the full-resolution level
 //    left invalid (low texture), with twice the coarse disparity.
 // Validity: an image may come with a mask of the pixels that see the world (a view's pixels with a
-// camera source, inside the camera's field, not the own car). No disparity then comes from a window
+// camera source, inside the camera's field). Invalid pixels take the value of the nearest valid one
+// before the prefilter (no edge where the valid area ends), and no disparity comes from a window
 // that touches an invalid pixel in either image, at either level: the edge of a camera's field is
 // never matched.
 // Temporal consistency (the paper's variance check over frames) is the separate, stateful
@@ -105,10 +106,16 @@ class SadStereoMatcher {
     // only; empty when the whole image is valid.
     cv::Mat window_valid[2];
     cv::Mat scratch[4];   // working memory, kept between calls
+    // What Prepare derived from the last validity mask, reused while the same mask comes again (a
+    // view's mask does not change from frame to frame): the mask itself (shared, not copied),
+    // whether any pixel is invalid, and for each pixel the valid pixel whose value it takes.
+    cv::Mat mask_seen, fill_map;
+    bool mask_has_invalid = false;
   };
   // Prefilters a grey or BGR image into `view` (its buffers reused). `valid` (optional, CV_8U of
-  // the image's size): 255 where the pixel sees the world. Const: concurrent calls on one matcher
-  // are safe.
+  // the image's size): 255 where the pixel sees the world; what it implies is derived once and reused
+  // while the same mask (the same cv::Mat data) comes again, so a mask must not be changed in place
+  // between calls. Const: concurrent calls on one matcher are safe.
   void Prepare(const cv::Mat& image, PreparedView* view, const cv::Mat& valid = cv::Mat()) const;
   // `view` turned left to right (the pair then matches the other way round).
   static void Mirror(const PreparedView& view, PreparedView* mirrored);
