@@ -137,6 +137,7 @@ std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& 
 // Each camera's mask (DESIGN.md §3.2): the drive's masks/<camera>.png, else rig.yaml's, else
 // estimated from the drive's first seconds.
 void AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput* in, DriveSummary* s) {
+  if (!(o.mask_estimate_s > 0)) throw Error(Str("drive option mask_estimate_s = ", o.mask_estimate_s, ": expected > 0"));
   for (RigCamera& camera : in->rig.cameras) {
     if (camera.name != "left" && camera.name != "right") continue;
     const fs::path file = fs::path(drive_dir) / "masks" / (camera.name + ".png");
