@@ -110,7 +110,7 @@ void TestRealFisheye() {
 void TestRigMask() {
   const fs::path dir = dps_test::ScratchDir("dps_test_valid_mask");
   dps::Rig rig = dps_test::OmniRig();
-  dps::RigCamera& left = const_cast<dps::RigCamera&>(rig.Camera("left"));
+  dps::RigCamera& left = rig.cameras[0].name == "left" ? rig.cameras[0] : rig.cameras[1];
   cv::Mat mask(left.model.height(), left.model.width(), CV_8U, cv::Scalar(255));
   mask.colRange(0, mask.cols / 2).setTo(0);  // the left half of the image sees nothing
   fs::create_directories(dir / "masks");

@@ -71,15 +71,21 @@ void CameraModel::CheckCommon() const {
           "finite and >= 0 (0 = no rim)");
 }
 
-CameraModel CameraModel::Hyperbolic(int width, int height, const Eigen::Matrix3d& K, double a,
-                                    double b, double rim_radius_px) {
+CameraModel CameraModel::Common(CameraModelType type, int width, int height, const Eigen::Matrix3d& K,
+                                double rim_radius_px) {
   CameraModel m;
-  m.type_ = CameraModelType::kHyperbolic;
+  m.type_ = type;
   m.width_ = width;
   m.height_ = height;
   m.K_ = K;
   m.rim_radius_px_ = rim_radius_px;
   m.CheckCommon();
+  return m;
+}
+
+CameraModel CameraModel::Hyperbolic(int width, int height, const Eigen::Matrix3d& K, double a,
+                                    double b, double rim_radius_px) {
+  CameraModel m = Common(CameraModelType::kHyperbolic, width, height, K, rim_radius_px);
   Require(a > 0.0 && std::isfinite(a), "a", a, "finite and a > 0");
   Require(b >= 0.0 && std::isfinite(b), "b", b, "finite and b >= 0");
   m.a_ = a;
@@ -154,13 +160,7 @@ bool CameraModel::Undistort(const Eigen::Vector2d& md, Eigen::Vector2d* m) const
 
 CameraModel CameraModel::Fisheye(int width, int height, const Eigen::Matrix3d& K,
                                  const std::array<double, 4>& dist, double rim_radius_px) {
-  CameraModel m;
-  m.type_ = CameraModelType::kFisheye;
-  m.width_ = width;
-  m.height_ = height;
-  m.K_ = K;
-  m.rim_radius_px_ = rim_radius_px;
-  m.CheckCommon();
+  CameraModel m = Common(CameraModelType::kFisheye, width, height, K, rim_radius_px);
   for (int i = 0; i < 4; ++i) {
     Require(std::isfinite(dist[i]), Str("dist[", i, "] (k", i + 1, ")"), dist[i], "finite");
   }

@@ -12,8 +12,7 @@
 
 namespace dps {
 
-cv::Mat CameraValidMask(const RigCamera& camera) {
-  const CameraModel& model = camera.model;
+cv::Mat ModelValidMask(const CameraModel& model) {
   cv::Mat mask(model.height(), model.width(), CV_8U);
   cv::parallel_for_(cv::Range(0, mask.rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
@@ -24,6 +23,11 @@ cv::Mat CameraValidMask(const RigCamera& camera) {
       }
     }
   });
+  return mask;
+}
+
+cv::Mat CameraValidMask(const RigCamera& camera) {
+  cv::Mat mask = ModelValidMask(camera.model);
   if (!camera.mask.empty()) mask &= camera.mask;
   return mask;
 }
@@ -99,7 +103,7 @@ cv::Mat EstimateFieldMask(const std::vector<cv::Mat>& frames, const CameraModel&
   options.Check();
   if (frames.empty()) throw Error("field mask: no frames to estimate it from");
   const cv::Mat brightest = Brightest(frames, model);
-  cv::Mat model_valid = CameraValidMask(RigCamera{"", model, Pose(), cv::Mat(), std::string()});
+  cv::Mat model_valid = ModelValidMask(model);
   if (cv::countNonZero(model_valid) == 0) model_valid.setTo(255);
   const double level = UpperQuartile(brightest, model_valid);
   // Dark, or unseen by the model: the candidates for "beyond the field".

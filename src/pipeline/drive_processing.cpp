@@ -135,8 +135,10 @@ std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& 
 }
 
 // Each camera's mask (DESIGN.md §3.2): the drive's masks/<camera>.png, else rig.yaml's, else
-// estimated from the drive's first seconds.
-void AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput* in, DriveSummary* s) {
+// estimated from the drive's first seconds. Returns each camera's valid pixels (CameraValidMask).
+std::map<std::string, cv::Mat> AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput* in,
+                                           DriveSummary* s) {
+  std::map<std::string, cv::Mat> valid_masks;
   if (!(o.mask_estimate_s > 0)) throw Error(Str("drive option mask_estimate_s = ", o.mask_estimate_s, ": expected > 0"));
   for (RigCamera& camera : in->rig.cameras) {
     if (camera.name != "left" && camera.name != "right") continue;
@@ -156,16 +158,17 @@ void AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput
     }
     const cv::Mat valid = CameraValidMask(camera);
     m.valid_fraction = static_cast<double>(cv::countNonZero(valid)) / static_cast<double>(valid.total());
+    valid_masks[camera.name] = valid;
   }
+  return valid_masks;
 }
 
 // The masks used, as pictures a user can check and correct (and put into the drive's masks/).
-void WriteMasks(const Rig& rig, const fs::path& dir) {
+void WriteMasks(const std::map<std::string, cv::Mat>& valid_masks, const fs::path& dir) {
   fs::create_directories(dir);
-  for (const RigCamera& camera : rig.cameras) {
-    if (camera.name != "left" && camera.name != "right") continue;
-    const std::string path = (dir / (camera.name + ".png")).string();
-    if (!cv::imwrite(path, CameraValidMask(camera))) throw Error(Str(path, ": cannot write the mask"));
+  for (const auto& [name, valid] : valid_masks) {
+    const std::string path = (dir / (name + ".png")).string();
+    if (!cv::imwrite(path, valid)) throw Error(Str(path, ": cannot write the mask"));
   }
 }
 
@@ -416,14 +419,14 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   CheckOutputFolder(s.output_dir, {drive_dir});
   CheckReplaceable(s.output_dir, "summary.json");
   DriveInput in = OpenDrive(drive_dir, o, &s);
-  AttachMasks(drive_dir, o, &in, &s);
+  const std::map<std::string, cv::Mat> valid_masks = AttachMasks(drive_dir, o, &in, &s);
   // Outputs under a temporary name.
   fs::create_directories(out_root);
   const fs::path tmp = TemporaryFolderFor(s.output_dir);  // (and killed runs' ones removed)
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   try {
-    WriteMasks(in.rig, tmp / "masks");
+    WriteMasks(valid_masks, tmp / "masks");
     DriveRun run(drive_dir, o, in, tmp, &s);
     run.Run(progress);
     run.WriteFiles();

@@ -93,6 +93,9 @@ class CameraModel {
 
  private:
   CameraModel() = default;
+  // The fields every model has, checked (CheckCommon).
+  static CameraModel Common(CameraModelType type, int width, int height, const Eigen::Matrix3d& K,
+                            double rim_radius_px);
   void CheckCommon() const;
   bool InsideRim(const Eigen::Vector2d& pixel) const;
 

@@ -18,8 +18,11 @@
 
 namespace dps {
 
-// CV_8U of the camera's image size: 255 where the pixel centre unprojects to a ray (inside the
-// model's domain and rim) and the camera's mask (when set) is 255; else 0.
+// CV_8U of the model's image size: 255 where the pixel centre unprojects to a ray (inside the
+// model's domain and rim); else 0.
+cv::Mat ModelValidMask(const CameraModel& model);
+
+// ModelValidMask where the camera's mask (when set) is 255 too.
 cv::Mat CameraValidMask(const RigCamera& camera);
 
 // Reads a mask image for `model`: 8-bit, the model's size; pixels > 127 become 255, the others 0.
