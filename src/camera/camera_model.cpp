@@ -43,6 +43,7 @@ std::string ModelName(CameraModelType type) {
     case CameraModelType::kHyperbolic: return "hyperbolic";
     case CameraModelType::kUnified: return "unified";
     case CameraModelType::kFisheye: return "fisheye";
+    case CameraModelType::kOCam: return "ocam";
   }
   return "unknown";
 }
@@ -51,8 +52,9 @@ CameraModelType ModelTypeFromName(const std::string& name) {
   if (name == "hyperbolic") return CameraModelType::kHyperbolic;
   if (name == "unified") return CameraModelType::kUnified;
   if (name == "fisheye") return CameraModelType::kFisheye;
+  if (name == "ocam") return CameraModelType::kOCam;
   throw std::invalid_argument("unknown model '" + name +
-                              "' (expected hyperbolic, unified or fisheye)");
+                              "' (expected hyperbolic, unified, fisheye or ocam)");
 }
 
 void CameraModel::CheckCommon() const {
@@ -181,6 +183,31 @@ CameraModel CameraModel::Fisheye(int width, int height, const Eigen::Matrix3d& K
   return m;
 }
 
+CameraModel CameraModel::OCam(int width, int height, const OCamParameters& p, double rim_radius_px) {
+  Require(!p.ss.empty(), "ss", 0, "at least one coefficient");
+  for (size_t i = 0; i < p.ss.size(); ++i) Require(std::isfinite(p.ss[i]), Str("ss[", i, "]"), p.ss[i], "finite");
+  for (size_t i = 0; i < p.invpol.size(); ++i) {
+    Require(std::isfinite(p.invpol[i]), Str("invpol[", i, "]"), p.invpol[i], "finite");
+  }
+  Require(p.ss[0] < 0.0, "ss[0] (a0)", p.ss[0], "a0 < 0 (the optical axis is the toolbox's -z)");
+  Require(std::isfinite(p.xc), "center[0] (xc, row)", p.xc, "finite");
+  Require(std::isfinite(p.yc), "center[1] (yc, column)", p.yc, "finite");
+  Require(std::isfinite(p.c) && std::isfinite(p.d) && std::isfinite(p.e), "affine", p.c, "finite c, d, e");
+  Require(std::abs(p.c - p.d * p.e) > 1e-9, "affine[0] (c)", p.c, "c - d e != 0");
+  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
+  K(0, 0) = K(1, 1) = -p.ss[0];
+  K(0, 2) = p.yc;
+  K(1, 2) = p.xc;
+  CameraModel m = Common(CameraModelType::kOCam, width, height, K, rim_radius_px);
+  m.K_inv_ = K.inverse();
+  m.ocam_ = p;
+  if (m.ocam_.invpol.empty()) m.ocam_.invpol = FitOCamInverse(p, width, height);
+  m.ocam_range_ = OCamValidRange(m.ocam_, width, height);
+  Require(m.ocam_range_.r_max > 0.0, "ss", p.ss[0], Str("a valid range around the centre (it ends at once: ", m.ocam_range_.limit, ")"));
+  m.max_theta_rad_ = m.ocam_range_.theta_max + kPi / 2.0;
+  return m;
+}
+
 bool CameraModel::InsideRim(const Eigen::Vector2d& pixel) const {
   if (rim_radius_px_ <= 0.0) return true;
   const double du = pixel.x() - K_(0, 2);
@@ -196,6 +223,12 @@ bool CameraModel::InImage(const Eigen::Vector2d& pixel) const {
 bool CameraModel::Project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) const {
   const double r = p.norm();
   if (!(r > 0.0) || !std::isfinite(r)) return false;
+  if (type_ == CameraModelType::kOCam) {
+    Eigen::Vector2d out;
+    if (!OCamWorldToCam(ocam_, ocam_range_.theta_max, p, &out) || !InsideRim(out)) return false;
+    *pixel = out;
+    return true;
+  }
   double mx = 0.0;
   double my = 0.0;
   if (type_ == CameraModelType::kFisheye) {
@@ -229,6 +262,7 @@ bool CameraModel::Project(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) cons
 
 bool CameraModel::Unproject(const Eigen::Vector2d& pixel, Eigen::Vector3d* ray) const {
   if (!InsideRim(pixel)) return false;
+  if (type_ == CameraModelType::kOCam) return OCamCamToWorld(ocam_, ocam_range_.r_max, pixel, ray);
   double my = (pixel.y() - K_(1, 2)) * K_inv_(1, 1);
   double mx = (pixel.x() - K_(0, 2) - K_(0, 1) * my) / K_(0, 0);
   if (Distorted()) {
@@ -311,6 +345,17 @@ CameraModel ResizeCameraModel(const CameraModel& m, int width, int height) {
     case CameraModelType::kHyperbolic: return CameraModel::Hyperbolic(width, height, K, m.a(), m.b(), rim);
     case CameraModelType::kUnified: return CameraModel::Unified(width, height, K, m.xi(), rim, m.dist());
     case CameraModelType::kFisheye: return CameraModel::Fisheye(width, height, K, m.dist(), rim);
+    case CameraModelType::kOCam: {
+      // Columns scale the radius by sx; the rows' extra factor sy / sx goes into the affine part.
+      OCamParameters p = m.ocam();
+      for (size_t i = 0; i < p.ss.size(); ++i) p.ss[i] *= std::pow(sx, 1.0 - static_cast<double>(i));
+      for (double& c : p.invpol) c *= sx;
+      p.xc = sy * (p.xc + 0.5) - 0.5;
+      p.yc = sx * (p.yc + 0.5) - 0.5;
+      p.c *= sy / sx;
+      p.d *= sy / sx;
+      return CameraModel::OCam(width, height, p, rim);
+    }
   }
   throw std::invalid_argument("ResizeCameraModel: unknown model type");
 }

@@ -18,6 +18,14 @@ using internal::FieldReader;
 using internal::OneLine;
 using internal::OpenForReading;
 
+constexpr size_t kMaxPolynomialTerms = 64;
+
+void WriteList(cv::FileStorage& fs, const std::string& key, const std::vector<double>& values) {
+  fs << key << "[:";
+  for (double v : values) fs << v;
+  fs << "]";
+}
+
 // Calls a CameraModel factory and turns its std::invalid_argument into a dps::Error with context.
 template <typename Factory>
 CameraModel MakeModel(const std::string& where, Factory&& factory) {
@@ -38,8 +46,21 @@ CameraModel ReadIntrinsics(const FieldReader& f) {
   }
   const int width = f.Integer("width");
   const int height = f.Integer("height");
-  const Eigen::Matrix3d K = f.Matrix("K", 3, 3);
   const double rim = f.NumberOr("rim_radius_px", 0.0);
+  if (type == CameraModelType::kOCam) {
+    OCamParameters p;
+    p.ss = f.List("ss", 1, kMaxPolynomialTerms);
+    if (f.Has("invpol")) p.invpol = f.List("invpol", 1, kMaxPolynomialTerms);
+    const std::vector<double> center = f.List("center", 2, 2);
+    const std::vector<double> affine = f.List("affine", 3, 3);
+    p.xc = center[0];
+    p.yc = center[1];
+    p.c = affine[0];
+    p.d = affine[1];
+    p.e = affine[2];
+    return MakeModel(f.where(), [&] { return CameraModel::OCam(width, height, p, rim); });
+  }
+  const Eigen::Matrix3d K = f.Matrix("K", 3, 3);
   switch (type) {
     case CameraModelType::kHyperbolic: {
       const double a = f.Number("a");
@@ -61,6 +82,7 @@ CameraModel ReadIntrinsics(const FieldReader& f) {
       return MakeModel(f.where(),
                        [&] { return CameraModel::Fisheye(width, height, K, dist, rim); });
     }
+    case CameraModelType::kOCam: break;
   }
   f.Fail("model", "unsupported");
 }
@@ -75,15 +97,16 @@ void WriteMatrix(cv::FileStorage& fs, const std::string& key, const Eigen::Matri
 
 cv::Size ReadImageSize(const FieldReader& f, cv::Size size) {
   if (size.width > 0 && size.height > 0) return size;
-  if (f.Has("resolution")) {
-    const Eigen::MatrixXd r = f.Matrix("resolution", 2, 1);
+  for (const char* key : {"resolution", "imageSize"}) {  // [w, h]; imageSize: cv::omnidir's samples
+    if (!f.Has(key)) continue;
+    const Eigen::MatrixXd r = f.Matrix(key, 2, 1);
     return cv::Size(static_cast<int>(r(0)), static_cast<int>(r(1)));
   }
   if (f.Has("image_width") && f.Has("image_height")) {
     return cv::Size(f.Integer("image_width"), f.Integer("image_height"));
   }
-  f.Fail("resolution", "missing (no 'resolution' or 'image_width'/'image_height'; give the image "
-                       "size explicitly)");
+  f.Fail("resolution", "missing (no 'resolution', 'imageSize' or 'image_width'/'image_height'; give the "
+                       "image size explicitly)");
 }
 
 std::string FirstPresent(const FieldReader& f, std::initializer_list<const char*> keys) {
@@ -153,7 +176,7 @@ std::string RigToYaml(const Rig& rig) {
     const CameraModel& m = c.model;
     fs << "{" << "name" << c.name << "model" << ModelName(m.type()) << "width" << m.width()
        << "height" << m.height();
-    WriteMatrix(fs, "K", m.K());
+    if (m.type() != CameraModelType::kOCam) WriteMatrix(fs, "K", m.K());
     switch (m.type()) {
       case CameraModelType::kHyperbolic: fs << "a" << m.a() << "b" << m.b(); break;
       case CameraModelType::kUnified:
@@ -168,6 +191,12 @@ std::string RigToYaml(const Rig& rig) {
         fs << "dist" << "[:";
         for (double k : m.dist()) fs << k;
         fs << "]";
+        break;
+      case CameraModelType::kOCam:
+        WriteList(fs, "ss", m.ocam().ss);
+        WriteList(fs, "invpol", m.ocam().invpol);
+        WriteList(fs, "center", {m.ocam().xc, m.ocam().yc});
+        WriteList(fs, "affine", {m.ocam().c, m.ocam().d, m.ocam().e});
         break;
     }
     if (m.rim_radius_px() > 0.0) fs << "rim_radius_px" << m.rim_radius_px();
@@ -199,8 +228,9 @@ CameraModel ReadOpenCVOmnidir(const std::string& path, cv::Size size) {
   cv::FileStorage fs = OpenForReading(path);
   const FieldReader f(fs.root(), path);
   const Eigen::Matrix3d K = f.Matrix(FirstPresent(f, {"K", "camera_matrix"}), 3, 3);
-  const std::string xi_key = "xi";
-  const double xi = f.Required(xi_key).isMap() ? f.Matrix(xi_key, 1, 1)(0) : f.Number(xi_key);
+  const std::string xi_key = FirstPresent(f, {"xi", "Xi"});
+  const cv::FileNode xi_node = f.Required(xi_key);
+  const double xi = xi_node.isMap() || xi_node.isSeq() ? f.Matrix(xi_key, 1, 1)(0) : f.Number(xi_key);
   const std::string d_key = FirstPresent(f, {"D", "distortion_coefficients"});
   std::array<double, 4> dist{0, 0, 0, 0};
   if (f.Has(d_key)) {

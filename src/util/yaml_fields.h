@@ -148,6 +148,22 @@ class FieldReader {
     return out;
   }
 
+  // A plain list of min_size .. max_size finite numbers.
+  std::vector<double> List(const std::string& key, size_t min_size, size_t max_size) const {
+    const cv::FileNode n = Required(key);
+    if (!n.isSeq()) Fail(key, "expected a list of numbers");
+    if (n.size() < min_size || n.size() > max_size) {
+      Fail(key, Str("expected ", min_size, " to ", max_size, " numbers, got ", n.size()));
+    }
+    std::vector<double> values;
+    for (const cv::FileNode& item : n) {
+      if (!item.isReal() && !item.isInt()) Fail(key, "expected a list of numbers");
+      values.push_back(static_cast<double>(item));
+      if (!std::isfinite(values.back())) Fail(key, "has a non-finite entry");
+    }
+    return values;
+  }
+
   const std::string& where() const { return where_; }
 
  private:

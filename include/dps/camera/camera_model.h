@@ -1,4 +1,5 @@
-// dps — central camera models: hyperbolic mirror, unified (Mei), fisheye (Kannala–Brandt).
+// dps — central camera models: hyperbolic mirror, unified (Mei), fisheye (Kannala–Brandt),
+// OCamCalib (Scaramuzza).
 //
 // Conventions
 // - Camera frame: origin at the single effective viewpoint, Z along the optical / mirror axis,
@@ -27,6 +28,9 @@
 //       theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8),
 //       [u v 1]^T = K [theta_d cos(phi), theta_d sin(phi), 1]^T;  all k = 0 is equidistant.
 //   Rays are valid up to the largest theta (<= pi) below which theta_d grows monotonically.
+// - ocam (Scaramuzza's OCamCalib, exactly as its cam2world / world2cam): see ocam_model.h. It has
+//   no K of its own; K() is the pinhole that matches it at the axis (focal -a0, centre (yc, xc)),
+//   which is where the rim is centred.
 //
 // Every model may have a rim: a circle of radius rim_radius_px around the principal point
 // (cx, cy) outside which no pixel sees the scene (the mirror's rim, the lens' image circle).
@@ -38,11 +42,13 @@
 
 #include <Eigen/Core>
 
+#include "dps/camera/ocam_model.h"
+
 namespace dps {
 
-enum class CameraModelType { kHyperbolic, kUnified, kFisheye };
+enum class CameraModelType { kHyperbolic, kUnified, kFisheye, kOCam };
 
-// "hyperbolic", "unified" or "fisheye", as in rig.yaml.
+// "hyperbolic", "unified", "fisheye" or "ocam", as in rig.yaml.
 std::string ModelName(CameraModelType type);
 // Inverse of ModelName; throws std::invalid_argument for any other string.
 CameraModelType ModelTypeFromName(const std::string& name);
@@ -63,6 +69,9 @@ class CameraModel {
   // monotonic near the axis). Same constraints on the other arguments as Hyperbolic.
   static CameraModel Fisheye(int width, int height, const Eigen::Matrix3d& K,
                              const std::array<double, 4>& dist, double rim_radius_px = 0.0);
+  // OCamCalib model: ss non-empty with a0 < 0, all coefficients finite, c - d e != 0; invpol is
+  // fitted (FitOCamInverse) when empty. The valid range is OCamValidRange's.
+  static CameraModel OCam(int width, int height, const OCamParameters& parameters, double rim_radius_px = 0.0);
 
   // Projects a point in the camera frame to a pixel. Returns false when the point has no image
   // (at the viewpoint, behind the mirror / outside the field of view, or beyond the rim).
@@ -90,6 +99,8 @@ class CameraModel {
   // Largest valid angle between a ray and +Z, radians (fisheye: monotonic range; others: from
   // the mirror's validity condition).
   double max_theta_rad() const { return max_theta_rad_; }
+  // ocam: its parameters (empty polynomials for the other models).
+  const OCamParameters& ocam() const { return ocam_; }
 
  private:
   CameraModel() = default;
@@ -111,6 +122,8 @@ class CameraModel {
   double max_theta_rad_ = 0.0;
   double max_theta_d_ = 0.0;  // fisheye: theta_d at max_theta_rad_
   double max_r2_ = 0.0;       // unified with distortion: largest squared undistorted radius, else 0
+  OCamParameters ocam_;
+  OCamRange ocam_range_;
   bool Distorted() const { return type_ == CameraModelType::kUnified && max_r2_ > 0.0; }
   Eigen::Vector2d Distort(const Eigen::Vector2d& m) const;
   bool Undistort(const Eigen::Vector2d& md, Eigen::Vector2d* m) const;

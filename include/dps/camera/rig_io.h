@@ -1,8 +1,10 @@
 // dps — reading and writing rig.yaml (DESIGN.md §3.1), and reading intrinsics from OpenCV's own
 // calibration files (cv::fisheye, cv::omnidir), so that users can bring what they already have.
 //
-// rig.yaml, per camera: name, model (hyperbolic | unified | fisheye), width, height, K (3x3),
-// a and b (hyperbolic), xi and optionally dist [k1, k2, p1, p2] (unified), dist [k1, k2, k3, k4] (fisheye), R (3x3, camera -> vehicle,
+// rig.yaml, per camera: name, model (hyperbolic | unified | fisheye | ocam), width, height, K (3x3;
+// not for ocam), a and b (hyperbolic), xi and optionally dist [k1, k2, p1, p2] (unified), dist
+// [k1, k2, k3, k4] (fisheye), ss, optional invpol, center [xc, yc] and affine [c, d, e] (ocam,
+// DESIGN.md §2; invpol is fitted when absent and always written), R (3x3, camera -> vehicle,
 // orthonormal within 1e-6, det +1), t (3x1, metres, vehicle frame), and optionally rim_radius_px
 // (pixels around the principal point that see the scene; 0 or absent = no rim) and mask (an 8-bit
 // image of the camera's size, 255 = sees the world, relative to the rig file's folder; ReadRig
@@ -40,8 +42,9 @@ void WriteRig(const Rig& rig, const std::string& path);
 // has none. Throws dps::Error naming the file and the field.
 CameraModel ReadOpenCVFisheye(const std::string& path, cv::Size size = cv::Size());
 
-// Reads a cv::omnidir calibration result (`K` or `camera_matrix`, `xi`, `D` or
-// `distortion_coefficients` = [k1 k2 p1 p2], optional) as a unified model with that distortion.
+// Reads a cv::omnidir calibration result (`K` or `camera_matrix`, `xi` or `Xi`, `D` or
+// `distortion_coefficients` = [k1 k2 p1 p2], optional; the size also from `imageSize`) as a
+// unified model with that distortion.
 CameraModel ReadOpenCVOmnidir(const std::string& path, cv::Size size = cv::Size());
 
 }  // namespace dps
