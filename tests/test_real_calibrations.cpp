@@ -254,7 +254,8 @@ void TestPJLab() {
   o.format = dps::CalibrationFormat::kPJLabOCam;
   for (const fs::path& f : files) o.files.push_back(f.string());
   CHECK_THROWS_WITH(dps::ImportRig(o), dps::Error, "--bev-height");
-  o.bev_height_m = {6.07826, 6.25217, 6.31014, 6.28116};  // run_avm.cpp's heights, per camera
+  o.bev_height_by_camera = {{"front_camera", 6.07826}, {"left_camera", 6.25217}, {"back_camera", 6.31014},
+                            {"right_camera", 6.28116}};  // run_avm.cpp's heights, per camera
   std::vector<std::string> notes;
   const dps::Rig rig = dps::ImportRig(o, &notes);
   CHECK_EQ(rig.cameras.size(), size_t(4));

@@ -229,13 +229,13 @@ CameraModel ReadKitti360Fisheye(const std::string& path, std::string* camera_nam
   const FieldReader mirror = f.Child(f.Required("mirror_parameters"), "mirror_parameters");
   const FieldReader dist = f.Child(f.Required("distortion_parameters"), "distortion_parameters");
   const FieldReader proj = f.Child(f.Required("projection_parameters"), "projection_parameters");
+  const double xi = mirror.Number("xi");
+  const std::array<double, 4> d{dist.Number("k1"), dist.Number("k2"), dist.Number("p1"), dist.Number("p2")};
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
   K(0, 0) = proj.Number("gamma1");
   K(1, 1) = proj.Number("gamma2");
   K(0, 2) = proj.Number("u0");
   K(1, 2) = proj.Number("v0");
-  const double xi = mirror.Number("xi");
-  const std::array<double, 4> d{dist.Number("k1"), dist.Number("k2"), dist.Number("p1"), dist.Number("p2")};
   const int w = f.Integer("image_width"), h = f.Integer("image_height");
   return Checked(path, [&] { return CameraModel::Unified(w, h, K, xi, 0.0, d); });
 }
@@ -360,8 +360,9 @@ Pose NominalMount(const Vehicle& vehicle, bool left, NominalAxis axis, double he
 
 void ImportOptions::Check() const {
   if (files.empty()) throw Error("import: no calibration files given");
-  for (double h : bev_height_m) {
-    if (!(h > 0.0 && h < 1000.0)) throw Error(Str("import: bird's-eye height ", h, " m: expected > 0"));
+  if (!(bev_height_m >= 0.0 && bev_height_m < 1e6)) throw Error(Str("import: bird's-eye height ", bev_height_m, ": expected > 0"));
+  for (const auto& [name, h] : bev_height_by_camera) {
+    if (!(h > 0.0 && h < 1e6)) throw Error(Str("import: bird's-eye height of '", name, "' ", h, ": expected > 0"));
   }
   if (!source_origin.allFinite()) throw Error("import: the source frame's origin must be finite");
   if (!(source_unit_m > 0.0 && source_unit_m < 1e6)) throw Error(Str("import: unit ", source_unit_m, " m: expected > 0"));
@@ -429,16 +430,15 @@ std::vector<Source> ReadPJLab(const ImportOptions& o) {
     s.name = name;
     sources.push_back(std::move(s));
   }
-  if (!extrinsics.empty() && o.bev_height_m.empty()) {
-    throw Error("import pjlab-ocam: the extrinsics are relative to a bird's-eye camera: give its height above the road (--bev-height)");
-  }
-  if (o.bev_height_m.size() > 1 && o.bev_height_m.size() != sources.size()) {
-    throw Error(Str("import pjlab-ocam: ", o.bev_height_m.size(), " bird's-eye heights for ", sources.size(), " cameras"));
-  }
   for (size_t i = 0; i < sources.size(); ++i) {
     const auto it = extrinsics.find(sources[i].name);
     if (it == extrinsics.end()) continue;
-    const double h = o.bev_height_m.size() == 1 ? o.bev_height_m[0] : o.bev_height_m[i];
+    const auto given = o.bev_height_by_camera.find(sources[i].name);
+    const double h = given != o.bev_height_by_camera.end() ? given->second : o.bev_height_m;
+    if (!(h > 0.0)) {
+      throw Error("import pjlab-ocam: camera '" + sources[i].name + "': the extrinsics are relative to a bird's-eye camera: "
+                  "give its height above the road (--bev-height H or --bev-height " + sources[i].name + "=H,...)");
+    }
     const Pose bev_from_camera = it->second.first.Inverse();
     Pose p;
     p.R = kVehicleFromBev * bev_from_camera.R;

@@ -66,7 +66,10 @@ struct ImportOptions {
   Vehicle vehicle;
   cv::Size size;                       // omnidir / opencv-fisheye files without an image size
   Eigen::Vector3d source_origin = Eigen::Vector3d::Zero();  // kitti360: the pose frame's origin, vehicle frame
-  std::vector<double> bev_height_m;    // pjlab-ocam: one per camera, or one for all (source units)
+  // pjlab-ocam: the bird's-eye camera's height above the road (files' units), per source camera
+  // name ("front_camera"), else bev_height_m for all.
+  std::map<std::string, double> bev_height_by_camera;
+  double bev_height_m = 0.0;
   double source_unit_m = 1.0;          // metres per unit of the files' translations (pjlab states none)
   NominalAxis nominal_axis = NominalAxis::kDown;  // cameras without extrinsics
   double nominal_height_m = 1.0;

@@ -1,0 +1,229 @@
+// dps-rig as a user runs it: import a real calibration, show it, project and unproject through
+// stdin / stdout (checked against the library), check and view real images; and the views of real
+// fisheye images keep a checkerboard's rows straight (corners found by OpenCV on the view lie on
+// lines), where the raw image bends them.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "check.h"
+#include "dps/camera/rig_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kTool = DPS_RIG_TOOL;
+const fs::path kData = fs::path(DPS_REAL_DATA_DIR) / "calibrations";
+const fs::path kShared = fs::path(DPS_SOURCE_DIR) / ".." / "shared" / "data" / "real_calibrations";
+const fs::path kWork = fs::temp_directory_path() / ("dps_rig_tool_" + std::to_string(::getpid()));
+
+// Runs a shell command; returns its exit status, stdout in *out and stderr in *err.
+int Run(const std::string& command, std::string* out = nullptr, std::string* err = nullptr, const std::string& input = "") {
+  const fs::path in = kWork / "stdin.txt", o = kWork / "stdout.txt", e = kWork / "stderr.txt";
+  std::ofstream(in) << input;
+  const int status = std::system((command + " < '" + in.string() + "' > '" + o.string() + "' 2> '" + e.string() + "'").c_str());
+  auto slurp = [](const fs::path& p) {
+    std::ifstream f(p);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  if (out) *out = slurp(o);
+  if (err) *err = slurp(e);
+  return WEXITSTATUS(status);
+}
+
+std::vector<std::vector<std::string>> Csv(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    rows.emplace_back();
+    std::string cell;
+    std::istringstream cells(line);
+    while (std::getline(cells, cell, ',')) rows.back().push_back(cell);
+    if (!line.empty() && line.back() == ',') rows.back().push_back("");
+  }
+  return rows;
+}
+
+void TestImportShowProject() {
+  const std::string rig = (kWork / "rig.yaml").string();
+  std::string out, err;
+  CHECK_EQ(Run(kTool + " --help", &out), 0);
+  CHECK(out.find("dps-rig import") != std::string::npos);
+  CHECK_EQ(Run(kTool + " import --format ocam '" + (kData / "ocam_fisheye_ocamcalib_sample" / "calib_results_fisheye.txt").string() +
+                   "' --name left --axis out --height 1.2 --out " + rig, &out, &err), 0);
+  CHECK(out.find("left: ocam 1024x768") != std::string::npos);
+  CHECK(err.find("nominal") != std::string::npos);
+  CHECK_EQ(Run(kTool + " show " + rig + " --out " + (kWork / "show.png").string(), &out), 0);
+  CHECK(out.find("1.2 m above the road") != std::string::npos);
+  CHECK(!cv::imread((kWork / "show.png").string()).empty());
+
+  // project / unproject: the same numbers as the library, and a ray through the point.
+  const dps::Rig r = dps::ReadRig(rig);
+  const dps::RigCamera& cam = r.Camera("left");
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::ostringstream points;
+  points << "x,y,z\n";
+  std::vector<Eigen::Vector3d> p;
+  for (int i = 0; i < 200; ++i) {
+    p.push_back(cam.vehicle_from_camera.t + 5.0 * Eigen::Vector3d(u(rng), u(rng), u(rng)));
+    points.precision(17);
+    points << p.back().x() << "," << p.back().y() << "," << p.back().z() << "\n";
+  }
+  CHECK_EQ(Run(kTool + " project " + rig + " --camera left", &out, &err, points.str()), 0);
+  const auto projected = Csv(out);
+  CHECK_EQ(projected.size(), p.size() + 1);
+  CHECK(projected[0] == (std::vector<std::string>{"u", "v", "valid"}));
+  std::ostringstream pixels;
+  pixels << "u,v\n";
+  int valid = 0, invalid = 0;
+  double worst_px = 0, worst_rad = 0;
+  std::vector<Eigen::Vector3d> seen;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const auto& row = projected[i + 1];
+    Eigen::Vector2d px;
+    const bool library = cam.model.Project(cam.vehicle_from_camera.Inverse().Apply(p[i]), &px);
+    CHECK_EQ(row.at(2), std::string(library ? "1" : "0"));
+    if (!library) {
+      ++invalid;
+      continue;
+    }
+    ++valid;
+    const Eigen::Vector2d tool(std::stod(row[0]), std::stod(row[1]));
+    worst_px = std::max(worst_px, (tool - px).norm());
+    pixels.precision(17);
+    pixels << tool.x() << "," << tool.y() << "\n";
+    seen.push_back(p[i]);
+  }
+  CHECK(valid > 20 && invalid > 20);  // the lens sees about half of all directions
+  CHECK_EQ(Run(kTool + " unproject " + rig + " --camera left", &out, &err, pixels.str()), 0);
+  const auto rays = Csv(out);
+  CHECK_EQ(rays.size(), seen.size() + 1);
+  for (size_t i = 0; i < seen.size(); ++i) {
+    const auto& row = rays[i + 1];
+    CHECK_EQ(row.at(3), std::string("1"));
+    const Eigen::Vector3d d(std::stod(row[0]), std::stod(row[1]), std::stod(row[2]));
+    const Eigen::Vector3d expected = (seen[i] - cam.vehicle_from_camera.t).normalized();
+    worst_rad = std::max(worst_rad, (d.normalized() - expected).norm());
+  }
+  std::printf("project: %d valid, %d invalid, %.1e px from the library; unproject back to %.1e rad\n", valid, invalid, worst_px, worst_rad);
+  CHECK(worst_px < 1e-6);
+  CHECK(worst_rad < 1e-4);  // the toolbox's ss and invpol agree to about 1e-3 px
+  CHECK_EQ(Run(kTool + " unproject " + rig + " --camera left", &out, &err, "u,v\n1,2,3\n"), 1);
+  CHECK(err.find("stdin line 2: expected 2 numbers") != std::string::npos);
+  CHECK_EQ(Run(kTool + " project " + rig + " --camera nobody", &out, &err, ""), 1);
+  CHECK(err.find("nobody") != std::string::npos);
+}
+
+// The largest distance of a checkerboard's corners from the line through their row or column.
+double Bend(const std::vector<cv::Point2f>& corners, cv::Size pattern) {
+  double worst = 0;
+  auto check = [&](const std::vector<cv::Point2f>& line) {
+    cv::Vec4f l;
+    cv::fitLine(line, l, cv::DIST_L2, 0, 0.01, 0.01);
+    for (const cv::Point2f& q : line) worst = std::max(worst, std::abs(double((q.x - l[2]) * l[1] - (q.y - l[3]) * l[0])));
+  };
+  for (int r = 0; r < pattern.height; ++r) {
+    check(std::vector<cv::Point2f>(corners.begin() + r * pattern.width, corners.begin() + (r + 1) * pattern.width));
+  }
+  for (int c = 0; c < pattern.width; ++c) {
+    std::vector<cv::Point2f> column;
+    for (int r = 0; r < pattern.height; ++r) column.push_back(corners[r * pattern.width + c]);
+    check(column);
+  }
+  return worst;
+}
+
+// Corners of a board of `pattern` inner corners, refined; empty when not found.
+std::vector<cv::Point2f> Corners(const cv::Mat& image, cv::Size pattern) {
+  cv::Mat grey;
+  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  std::vector<cv::Point2f> corners;
+  if (!cv::findChessboardCorners(grey, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE)) return {};
+  cv::cornerSubPix(grey, corners, {5, 5}, {-1, -1}, {cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 0.01});
+  return corners;
+}
+
+// A view along the lens's axis, from a real image with a checkerboard: the board's rows straight.
+void TestStraightView(const fs::path& calibration, const fs::path& image, cv::Size pattern, const std::string& view_options) {
+  if (!fs::exists(calibration)) {
+    std::printf("%s: skipped (not present)\n", calibration.string().c_str());
+    return;
+  }
+  const std::string rig = (kWork / "straight.yaml").string(), view = (kWork / "view.png").string();
+  CHECK_EQ(Run(kTool + " import --format ocam '" + calibration.string() + "' --name left --axis out --out " + rig), 0);
+  CHECK_EQ(Run(kTool + " view " + rig + " --camera left --image '" + image.string() + "' --out " + view + " " + view_options), 0);
+  const std::vector<cv::Point2f> in_view = Corners(cv::imread(view), pattern);
+  const std::vector<cv::Point2f> in_image = Corners(cv::imread(image.string()), pattern);
+  CHECK(!in_view.empty());
+  if (in_view.empty()) return;
+  const double bend_view = Bend(in_view, pattern);
+  const double bend_image = in_image.empty() ? -1 : Bend(in_image, pattern);
+  std::printf("%s: checkerboard rows and columns bend by at most %.2f px in the view (%.2f px in the raw image)\n",
+              calibration.parent_path().filename().string().c_str(), bend_view, bend_image);
+  // Corners of a real printed board, refined by cornerSubPix in an interpolated view, are good to a
+  // few tenths of a pixel: a row that stays within 1 px of a line over 500+ px is straight; the lens
+  // bends the same rows by 13 px in the raw image.
+  CHECK(bend_view < 1.0);
+  if (bend_image >= 0) CHECK(bend_image > 10 * bend_view);
+}
+
+void TestCheckAndBadInputs() {
+  const std::string rig = (kWork / "kuanli.yaml").string();
+  const fs::path calibration = kData / "ocam_catadioptric_kuanli" / "calib_results.txt";
+  const fs::path image = kData / "ocam_catadioptric_kuanli" / "example.jpg";
+  std::string out, err;
+  CHECK_EQ(Run(kTool + " import --format ocam '" + calibration.string() + "' --name left --out " + rig), 0);
+  // The calibration is for a crop of the image: refused with both sizes named.
+  CHECK_EQ(Run(kTool + " check " + rig + " --images left=" + image.string() + " --out " + (kWork / "check").string(), &out, &err), 1);
+  CHECK(err.find("1920x1080") != std::string::npos && err.find("1300x1080") != std::string::npos);
+  // Cropped as the calibration says (columns 300..1599): the check picture is written.
+  cv::Mat full = cv::imread(image.string());
+  cv::imwrite((kWork / "crop.png").string(), full(cv::Rect(300, 0, 1300, 1080)));
+  CHECK_EQ(Run(kTool + " check " + rig + " --images left=" + (kWork / "crop.png").string() + " --out " + (kWork / "check").string()), 0);
+  const cv::Mat drawn = cv::imread((kWork / "check" / "check_left.png").string());
+  CHECK(drawn.size() == cv::Size(1300, 1080));
+  CHECK(cv::norm(drawn, cv::imread((kWork / "crop.png").string()), cv::NORM_L1) > 0);  // something was drawn
+
+  CHECK_EQ(Run(kTool + " import --format matlab x --out " + rig, &out, &err), 1);
+  CHECK(err.find("unknown calibration format 'matlab'") != std::string::npos);
+  std::ofstream(kWork / "short.txt") << "5 -266.588 0 1.22e-03 -5.78e-07 2.0e-09\n2 443.18 308.13\n";
+  CHECK_EQ(Run(kTool + " import --format ocam " + (kWork / "short.txt").string() + " --out " + (kWork / "never.yaml").string(), &out, &err), 1);
+  CHECK(err.find("short.txt: field 'center (row column)': missing") != std::string::npos);
+  CHECK(!fs::exists(kWork / "never.yaml"));
+  CHECK_EQ(Run(kTool + " import --format pjlab-ocam " + (kData / "ocam_surround_pjlab" / "intrinsic" / "Front.json").string() + " " +
+                   (kData / "ocam_surround_pjlab" / "extrinsic" / "Front.json").string() + " --out " + rig, &out, &err), 1);
+  CHECK(err.find("--bev-height") != std::string::npos);
+  CHECK_EQ(Run(kTool + " view " + rig + " --camera left --image x.png", &out, &err), 1);
+  CHECK(err.find("--out") != std::string::npos);
+  CHECK_EQ(Run(kTool + " frobnicate " + rig, &out, &err), 1);
+  CHECK(err.find("unknown command 'frobnicate'") != std::string::npos);
+}
+
+}  // namespace
+
+int main() {
+  fs::create_directories(kWork);
+  TestImportShowProject();
+  TestCheckAndBadInputs();
+  // The OCamCalib sample (a wide-angle lens) and a ~190 degree fisheye of the same toolbox.
+  TestStraightView(kData / "ocam_fisheye_ocamcalib_sample" / "calib_results_fisheye.txt",
+                   kData / "ocam_fisheye_ocamcalib_sample" / "test_fisheye.jpg", {5, 8}, "--yaw-deg -90 --fov-deg 110 --size 1024x768");
+  TestStraightView(kShared / "ocam_fisheye_urban" / "calib_results.txt", kShared / "ocam_fisheye_urban" / "Fisheye2_1.jpg", {6, 8},
+                   "--yaw-deg -135 --pitch-deg 10 --fov-deg 110 --size 900x700");
+  fs::remove_all(kWork);
+  return dps_test::Report();
+}

@@ -1,0 +1,294 @@
+// dps-rig: bring a real rig's calibration in, look at it, and use it from scripts.
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include <Eigen/Geometry>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cli.h"
+#include "dps/camera/calibration_import.h"
+#include "dps/camera/rig_io.h"
+#include "dps/camera/rig_report.h"
+#include "dps/stereo/virtual_view.h"
+#include "dps/util/atomic_file.h"
+
+namespace {
+
+const char* kUsage = R"(usage: dps-rig COMMAND ...
+
+  dps-rig import --format FORMAT FILE... --out rig.yaml [options]
+      Reads a calibration from another toolbox into rig.yaml (DESIGN.md §3.1). FORMAT:
+        ocam            OCamCalib calib_results.txt (or the same numbers in YAML: ss, invpol, xy, cde, shape)
+        omnidir         cv::omnidir result (K, D, xi; also plain YAML as numpy writes it)
+        opencv-fisheye  cv::fisheye result (K, D)
+        kitti360        KITTI-360 image_0N.yaml (MEI) files and calib_cam_to_pose.txt
+        pjlab-ocam      PJLab SensorsCalibration surround JSON: intrinsic/*.json and extrinsic/*.json
+      One camera per intrinsics file. Extrinsics come from the files where they have them
+      (kitti360, pjlab-ocam), converted into the vehicle frame (X right, Y down, Z forward, origin
+      on the road below the car's centre); other cameras get a nominal side-mirror mount.
+        --name A,B,...          the cameras' names in file order (dps-process uses left and right)
+        --vehicle-length M      the own car, metres (default 4.8)
+        --vehicle-width M       (default 1.8)
+        --size WxH              image size for files that have none
+        --origin X,Y,Z          kitti360: where the pose frame's origin (the GPS/IMU) lies in the
+                                vehicle frame, metres (default 0,0,0)
+        --bev-height H | CAMERA=H,...
+                                pjlab-ocam: the bird's-eye camera's height above the road in the
+                                files' units, for all cameras or per camera (source names; required)
+        --unit-m U              metres per unit of the files' translations (default 1)
+        --axis down|out         nominal mount: axis down (mirror cameras, default) or looking out
+        --height M              nominal mount: camera height above the road (default 1.0)
+
+  dps-rig show rig.yaml [--out footprints.png] [--range M]
+      One line per camera (model, field, position, where its axis points, how much of the road
+      within 10 m it sees) and, with --out, a top-down picture of every camera's footprint on the
+      road around the own car (--range metres, default 12).
+
+  dps-rig project rig.yaml --camera NAME      stdin: x,y,z (vehicle frame, m)  stdout: u,v,valid
+  dps-rig unproject rig.yaml --camera NAME    stdin: u,v (pixels)              stdout: dx,dy,dz,valid
+      CSV with a header line; the ray is a unit vector in the vehicle frame from the camera's
+      viewpoint. valid = 0 where the model has no answer (the other columns are then empty).
+
+  dps-rig check rig.yaml --images NAME=IMAGE[,NAME=IMAGE...] --out DIR [--range M] [--grid M]
+      Draws the valid field's outline (green), the horizon (yellow), a road grid (cyan, every
+      --grid metres within --range) and the own car (red) over each camera's image:
+      DIR/check_NAME.png. If the grid is not on the road, the calibration or mounting is wrong.
+
+  dps-rig view rig.yaml --camera NAME --image IMAGE --out VIEW.png [--yaw-deg A] [--pitch-deg P]
+               [--fov-deg F] [--size WxH]
+      A virtual perspective view from the camera's image: looking at azimuth A (degrees from
+      straight ahead, + = right; default 0) and P degrees below the horizon (default 0), F degrees
+      across (default 90), WxH pixels (default 640x480). Straight edges must come out straight.
+
+  --help    this text
+)";
+
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+std::vector<double> Numbers(const std::string& option, const std::string& text) {
+  std::vector<double> out;
+  for (const std::string& item : SplitList(text)) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (*end != '\0' || !std::isfinite(v)) throw dps::Error("option --" + option + ": '" + item + "' is not a number");
+    out.push_back(v);
+  }
+  return out;
+}
+
+cv::Size ParseSize(const std::string& option, const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  std::istringstream in(text);
+  if (!(in >> w >> x >> h) || x != 'x' || (in >> extra) || w <= 0 || h <= 0 || w > 65536 || h > 65536) {
+    throw dps::Error("option --" + option + ": expected WxH, e.g. 640x480, got '" + text + "'");
+  }
+  return {w, h};
+}
+
+// Writes an image under its final name only once it is complete.
+void WriteImage(const std::string& path, const cv::Mat& image) {
+  const std::string tmp = dps::TemporaryPathFor(path);
+  bool written = false;
+  try {
+    written = cv::imwrite(tmp, image);
+  } catch (const cv::Exception&) {
+  }
+  if (!written) {
+    std::filesystem::remove(tmp);
+    throw dps::Error(path + ": cannot write the image (folder missing, or not a .png/.jpg name?)");
+  }
+  dps::RenameReplacing(tmp, path);
+}
+
+int Import(const dps_cli::Args& args) {
+  if (!args.Has("format")) throw dps::Error("import: missing --format (see --help)");
+  if (!args.Has("out")) throw dps::Error("import: missing --out rig.yaml");
+  dps::ImportOptions o;
+  o.format = dps::CalibrationFormatFromName(args.Get("format"));
+  o.files.assign(args.positional().begin() + 1, args.positional().end());
+  o.names = SplitList(args.Get("name"));
+  o.vehicle.length_m = args.Number("vehicle-length", o.vehicle.length_m);
+  o.vehicle.width_m = args.Number("vehicle-width", o.vehicle.width_m);
+  if (args.Has("size")) o.size = ParseSize("size", args.Get("size"));
+  if (args.Has("origin")) {
+    const std::vector<double> v = Numbers("origin", args.Get("origin"));
+    if (v.size() != 3) throw dps::Error("option --origin: expected X,Y,Z");
+    o.source_origin = Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  for (const std::string& item : SplitList(args.Get("bev-height"))) {
+    const size_t eq = item.find('=');
+    const std::vector<double> h = Numbers("bev-height", eq == std::string::npos ? item : item.substr(eq + 1));
+    if (h.size() != 1) throw dps::Error("option --bev-height: expected H or CAMERA=H, got '" + item + "'");
+    if (eq == std::string::npos) o.bev_height_m = h[0]; else o.bev_height_by_camera[item.substr(0, eq)] = h[0];
+  }
+  o.source_unit_m = args.Number("unit-m", 1.0);
+  const std::string axis = args.Get("axis", "down");
+  if (axis != "down" && axis != "out") throw dps::Error("option --axis: expected down or out, got '" + axis + "'");
+  o.nominal_axis = axis == "down" ? dps::NominalAxis::kDown : dps::NominalAxis::kOut;
+  o.nominal_height_m = args.Number("height", o.nominal_height_m);
+  std::vector<std::string> notes;
+  const dps::Rig rig = dps::ImportRig(o, &notes);
+  dps::WriteRig(rig, args.Get("out"));
+  for (const std::string& n : notes) std::cerr << n << "\n";
+  std::cout << dps::RigSummary(rig);
+  return 0;
+}
+
+int Show(const dps_cli::Args& args, const dps::Rig& rig) {
+  std::cout << dps::RigSummary(rig);
+  if (args.Has("out")) {
+    WriteImage(args.Get("out"), dps::DrawRigFootprints(rig, args.Number("range", 12.0)));
+    std::cerr << "footprints: " << args.Get("out") << "\n";
+  }
+  return 0;
+}
+
+// Reads CSV rows of `columns` numbers from stdin (a header line first, skipped when it is not
+// numeric) and writes one output row per input row.
+template <typename Row>
+int Stream(int columns, const std::string& header, Row&& row) {
+  std::cout << header << "\n";
+  std::cout.precision(15);
+  std::string line;
+  int number = 0;
+  while (std::getline(std::cin, line)) {
+    ++number;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    std::vector<double> v;
+    bool numeric = true;
+    for (const std::string& item : SplitList(line)) {
+      char* end = nullptr;
+      v.push_back(std::strtod(item.c_str(), &end));
+      numeric = numeric && end != item.c_str() && *end == '\0';
+    }
+    if (!numeric && number == 1) continue;  // the header
+    if (!numeric || static_cast<int>(v.size()) != columns) {
+      throw dps::Error(dps::Str("stdin line ", number, ": expected ", columns, " numbers, got '", line, "'"));
+    }
+    row(v);
+  }
+  return 0;
+}
+
+int Project(const dps_cli::Args& args, const dps::Rig& rig) {
+  const dps::RigCamera& c = rig.Camera(args.Get("camera"));
+  const dps::Pose camera_from_vehicle = c.vehicle_from_camera.Inverse();
+  return Stream(3, "u,v,valid", [&](const std::vector<double>& p) {
+    Eigen::Vector2d px;
+    if (c.model.Project(camera_from_vehicle.Apply({p[0], p[1], p[2]}), &px)) {
+      std::cout << px.x() << "," << px.y() << ",1\n";
+    } else {
+      std::cout << ",,0\n";
+    }
+  });
+}
+
+int Unproject(const dps_cli::Args& args, const dps::Rig& rig) {
+  const dps::RigCamera& c = rig.Camera(args.Get("camera"));
+  return Stream(2, "dx,dy,dz,valid", [&](const std::vector<double>& p) {
+    Eigen::Vector3d ray;
+    if (c.model.Unproject({p[0], p[1]}, &ray)) {
+      const Eigen::Vector3d d = c.vehicle_from_camera.Rotate(ray);
+      std::cout << d.x() << "," << d.y() << "," << d.z() << ",1\n";
+    } else {
+      std::cout << ",,,0\n";
+    }
+  });
+}
+
+cv::Mat ReadImage(const std::string& path) {
+  const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
+  if (image.empty()) throw dps::Error(path + ": cannot read image");
+  return image;
+}
+
+int Check(const dps_cli::Args& args, const dps::Rig& rig) {
+  if (!args.Has("images") || !args.Has("out")) throw dps::Error("check: needs --images NAME=IMAGE,... and --out DIR");
+  const std::string dir = args.Get("out");
+  dps::CheckOutputFolder(dir, {args.positional()[1]});
+  std::filesystem::create_directories(dir);
+  for (const std::string& item : SplitList(args.Get("images"))) {
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos) throw dps::Error("option --images: expected NAME=IMAGE, got '" + item + "'");
+    const dps::RigCamera& c = rig.Camera(item.substr(0, eq));
+    const cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(item.substr(eq + 1)), args.Number("range", 20.0),
+                                            args.Number("grid", 1.0));
+    const std::string out = (std::filesystem::path(dir) / ("check_" + c.name + ".png")).string();
+    WriteImage(out, drawn);
+    std::cerr << c.name << ": " << out << "\n";
+  }
+  return 0;
+}
+
+int View(const dps_cli::Args& args, const dps::Rig& rig) {
+  if (!args.Has("image") || !args.Has("out")) throw dps::Error("view: needs --image IMAGE and --out VIEW.png");
+  const dps::RigCamera& c = rig.Camera(args.Get("camera"));
+  const cv::Mat image = ReadImage(args.Get("image"));
+  if (image.cols != c.model.width() || image.rows != c.model.height()) {
+    throw dps::Error(dps::Str(args.Get("image"), ": ", image.cols, "x", image.rows, ", the calibration of '", c.name,
+                              "' is for ", c.model.width(), "x", c.model.height()));
+  }
+  const cv::Size size = ParseSize("size", args.Get("size", "640x480"));
+  const double fov = args.Number("fov-deg", 90.0) * M_PI / 180.0;
+  if (!(fov > 0.0 && fov < M_PI * 0.99)) throw dps::Error("option --fov-deg: expected between 0 and 178 degrees");
+  const double yaw = args.Number("yaw-deg", 0.0) * M_PI / 180.0, pitch = args.Number("pitch-deg", 0.0) * M_PI / 180.0;
+  dps::ViewSpec spec;
+  spec.width = size.width;
+  spec.height = size.height;
+  spec.focal_px = size.width / 2.0 / std::tan(fov / 2.0);
+  spec.cx = (size.width - 1) / 2.0;
+  spec.cy = (size.height - 1) / 2.0;
+  // Columns: image right, image down, viewing direction (vehicle frame: X right, Y down, Z forward).
+  const Eigen::Vector3d z(std::sin(yaw) * std::cos(pitch), std::sin(pitch), std::cos(yaw) * std::cos(pitch));
+  const Eigen::Vector3d x = Eigen::Vector3d(0, 1, 0).cross(z).normalized();
+  if (!x.allFinite()) throw dps::Error("view: looking straight up or down; give a pitch below 90 degrees");
+  spec.vehicle_from_view << x, z.cross(x), z;
+  spec.Check();
+  WriteImage(args.Get("out"), dps::VirtualView(c, spec).Render(image));
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return dps_cli::Run("dps-rig", [&] {
+    const dps_cli::Args args(argc, argv,
+                             {"format", "out", "name", "vehicle-length", "vehicle-width", "size", "origin", "bev-height",
+                              "unit-m", "axis", "height", "range", "camera", "images", "grid", "image", "yaw-deg",
+                              "pitch-deg", "fov-deg"},
+                             {});
+    if (args.help() || args.positional().empty()) {
+      std::cout << kUsage;
+      return args.help() ? 0 : 2;
+    }
+    const std::string command = args.positional()[0];
+    if (command == "import") {
+      if (args.positional().size() < 2) throw dps::Error("import: no calibration files given");
+      return Import(args);
+    }
+    const std::set<std::string> commands{"show", "project", "unproject", "check", "view"};
+    if (!commands.count(command)) throw dps::Error("unknown command '" + command + "' (see --help)");
+    if (args.positional().size() != 2) throw dps::Error(command + ": expected one rig.yaml");
+    const dps::Rig rig = dps::ReadRig(args.positional()[1]);
+    if ((command == "project" || command == "unproject" || command == "view") && !args.Has("camera")) {
+      throw dps::Error(command + ": missing --camera NAME");
+    }
+    if (command == "show") return Show(args, rig);
+    if (command == "project") return Project(args, rig);
+    if (command == "unproject") return Unproject(args, rig);
+    if (command == "check") return Check(args, rig);
+    return View(args, rig);
+  });
+}
