@@ -51,16 +51,19 @@ const char* kUsage = R"(usage: dps-rig COMMAND ...
       CSV with a header line; the ray is a unit vector in the vehicle frame from the camera's
       viewpoint. valid = 0 where the model has no answer (the other columns are then empty).
 
-  dps-rig check rig.yaml --images NAME=IMAGE[,NAME=IMAGE...] --out DIR [--range M] [--grid M]
+  dps-rig check rig.yaml --images NAME=IMAGE[,NAME=IMAGE...] --out DIR [--range M] [--grid M] [--crop X,Y]
+               [--ext png|jpg]
       Draws the valid field's outline (green), the horizon (yellow), a road grid (cyan, every
       --grid metres within --range) and the own car (red) over each camera's image:
-      DIR/check_NAME.png. If the grid is not on the road, the calibration or mounting is wrong.
+      DIR/check_NAME.png (or .jpg). If the grid is not on the road, the calibration or mounting is
+      wrong.
 
   dps-rig view rig.yaml --camera NAME --image IMAGE --out VIEW.png [--yaw-deg A] [--pitch-deg P]
-               [--fov-deg F] [--size WxH]
+               [--fov-deg F] [--size WxH] [--crop X,Y]
       A virtual perspective view from the camera's image: looking at azimuth A (degrees from
       straight ahead, + = right; default 0) and P degrees below the horizon (default 0), F degrees
       across (default 90), WxH pixels (default 640x480). Straight edges must come out straight.
+      --crop X,Y: the calibration is for a crop of the image, from column X, row Y.
 
   --help    this text
 )";
@@ -208,24 +211,42 @@ int Unproject(const dps_cli::Args& args, const dps::Rig& rig) {
   });
 }
 
-cv::Mat ReadImage(const std::string& path) {
-  const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
+// Reads an image; with --crop X,Y, the model's size from column X, row Y (for calibrations of a
+// crop of the camera's frames).
+cv::Mat ReadImage(const dps_cli::Args& args, const std::string& path, const dps::CameraModel& model) {
+  cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
   if (image.empty()) throw dps::Error(path + ": cannot read image");
+  if (args.Has("crop")) {
+    const std::vector<double> xy = Numbers("crop", args.Get("crop"));
+    const cv::Rect crop(xy.size() == 2 ? static_cast<int>(xy[0]) : -1, xy.size() == 2 ? static_cast<int>(xy[1]) : -1,
+                        model.width(), model.height());
+    if (xy.size() != 2 || crop.x != xy[0] || crop.y != xy[1] || crop.x < 0 || crop.y < 0 || crop.br().x > image.cols ||
+        crop.br().y > image.rows) {
+      throw dps::Error(dps::Str("option --crop: expected X,Y (whole pixels) with the calibration's ", model.width(), "x",
+                                model.height(), " inside the ", image.cols, "x", image.rows, " image ", path));
+    }
+    image = image(crop).clone();
+  }
+  if (image.cols != model.width() || image.rows != model.height()) {
+    throw dps::Error(dps::Str(path, ": ", image.cols, "x", image.rows, ", the calibration is for ", model.width(), "x",
+                              model.height(), " (a crop? see --crop)"));
+  }
   return image;
 }
 
 int Check(const dps_cli::Args& args, const dps::Rig& rig) {
   if (!args.Has("images") || !args.Has("out")) throw dps::Error("check: needs --images NAME=IMAGE,... and --out DIR");
-  const std::string dir = args.Get("out");
+  const std::string dir = args.Get("out"), ext = args.Get("ext", "png");
+  if (ext != "png" && ext != "jpg") throw dps::Error("option --ext: expected png or jpg, got '" + ext + "'");
   dps::CheckOutputFolder(dir, {args.positional()[1]});
   std::filesystem::create_directories(dir);
   for (const std::string& item : SplitList(args.Get("images"))) {
     const size_t eq = item.find('=');
     if (eq == std::string::npos) throw dps::Error("option --images: expected NAME=IMAGE, got '" + item + "'");
     const dps::RigCamera& c = rig.Camera(item.substr(0, eq));
-    const cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(item.substr(eq + 1)), args.Number("range", 20.0),
+    const cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, item.substr(eq + 1), c.model), args.Number("range", 20.0),
                                             args.Number("grid", 1.0));
-    const std::string out = (std::filesystem::path(dir) / ("check_" + c.name + ".png")).string();
+    const std::string out = (std::filesystem::path(dir) / ("check_" + c.name + "." + ext)).string();
     WriteImage(out, drawn);
     std::cerr << c.name << ": " << out << "\n";
   }
@@ -235,11 +256,7 @@ int Check(const dps_cli::Args& args, const dps::Rig& rig) {
 int View(const dps_cli::Args& args, const dps::Rig& rig) {
   if (!args.Has("image") || !args.Has("out")) throw dps::Error("view: needs --image IMAGE and --out VIEW.png");
   const dps::RigCamera& c = rig.Camera(args.Get("camera"));
-  const cv::Mat image = ReadImage(args.Get("image"));
-  if (image.cols != c.model.width() || image.rows != c.model.height()) {
-    throw dps::Error(dps::Str(args.Get("image"), ": ", image.cols, "x", image.rows, ", the calibration of '", c.name,
-                              "' is for ", c.model.width(), "x", c.model.height()));
-  }
+  const cv::Mat image = ReadImage(args, args.Get("image"), c.model);
   const cv::Size size = ParseSize("size", args.Get("size", "640x480"));
   const double fov = args.Number("fov-deg", 90.0) * M_PI / 180.0;
   if (!(fov > 0.0 && fov < M_PI * 0.99)) throw dps::Error("option --fov-deg: expected between 0 and 178 degrees");
@@ -267,7 +284,7 @@ int main(int argc, char** argv) {
     const dps_cli::Args args(argc, argv,
                              {"format", "out", "name", "vehicle-length", "vehicle-width", "size", "origin", "bev-height",
                               "unit-m", "axis", "height", "range", "camera", "images", "grid", "image", "yaw-deg",
-                              "pitch-deg", "fov-deg"},
+                              "pitch-deg", "fov-deg", "crop", "ext"},
                              {});
     if (args.help() || args.positional().empty()) {
       std::cout << kUsage;
