@@ -223,10 +223,37 @@ void TestProcessDrive() {
   // Left and right of different lengths: an error naming both, no output left behind.
   fs::remove(kTmp / "drives" / "lead" / "right" / "000005.png");
   CHECK_THROWS_WITH(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out2").string(), o), dps::Error,
-                    "has 6 frames");
+                    "has frames 0..5");
   CHECK(!fs::exists(kTmp / "out2" / "lead"));
   o.truncate = true;
   CHECK_EQ(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out2").string(), o).frames, 5);
+  // --truncate pairs by number: right without its first frame pairs left 1 with right 1.
+  const fs::path pairs = kTmp / "drives" / "pairs";
+  fs::copy(kTmp / "drives" / "lead", pairs, fs::copy_options::recursive);
+  fs::remove(pairs / "right" / "000000.png");
+  const dps::DriveSummary paired = dps::ProcessDrive(pairs.string(), (kTmp / "out_pairs").string(), o);
+  CHECK_EQ(paired.frames, 4);
+  CHECK(paired.ToJson().find("processing frames 1..4") != std::string::npos);
+  // Numbers without zero padding are ordered by number (2.png before 10.png); a gap, a number
+  // twice or a file without a number are errors naming the frame.
+  const fs::path plain = kTmp / "plain";
+  fs::create_directories(plain);
+  const cv::Mat tiny(4, 4, CV_8UC3, cv::Scalar(1, 2, 3));
+  for (int i = 0; i <= 11; ++i) cv::imwrite((plain / (std::to_string(i) + ".png")).string(), tiny + cv::Scalar::all(i));
+  auto source = dps::FrameSource::Open(kTmp.string(), "plain");
+  cv::Mat frame;
+  for (int i = 0; i <= 11; ++i) {
+    CHECK(source->Read(&frame));
+    CHECK_EQ(static_cast<int>(frame.at<cv::Vec3b>(0, 0)[0]), 1 + i);
+  }
+  cv::imwrite((plain / "003.png").string(), tiny);
+  CHECK_THROWS_WITH(dps::FrameSource::Open(kTmp.string(), "plain"), dps::Error, "frame 3 twice");
+  fs::remove(plain / "003.png");
+  fs::remove(plain / "3.png");
+  fs::remove(plain / "4.png");
+  CHECK_THROWS_WITH(dps::FrameSource::Open(kTmp.string(), "plain"), dps::Error, "frame 3 to 4 missing (2.png is followed by 5.png)");
+  cv::imwrite((plain / "cover.png").string(), tiny);
+  CHECK_THROWS_WITH(dps::FrameSource::Open(kTmp.string(), "plain"), dps::Error, "cover.png: not a numbered frame");
   // A drive without can.csv.
   fs::remove(kTmp / "drives" / "lead" / "can.csv");
   CHECK_THROWS_WITH(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out3").string(), o), dps::Error,

@@ -30,7 +30,8 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --diagnostics         also write diagnostics.avi: six panels per source (views, composite,
                         disparity, column histogram, obstacles) and diagnostics_middle.png
   --no-video            no map video
-  --truncate            left and right differ in length: use the shorter
+  --truncate            left and right differ: process the frame numbers both have
+                        (image folders pair by file number; videos by position)
   --no-mask-estimate    cameras without a mask: the model's field alone (no estimate from the images)
   --mask-seconds S      estimate masks from the first S seconds (default 2)
   --image-fps F         frame rate of image folders without frames.csv (default 30)

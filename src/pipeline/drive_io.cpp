@@ -1,6 +1,7 @@
 #include "dps/pipeline/drive_io.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
@@ -14,19 +15,49 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The frame number of an image file: the digits at the end of its name ("000012.png",
+// "frame_12.jpg" -> 12), or -1 when there are none.
+long FrameNumber(const fs::path& file) {
+  const std::string stem = file.stem().string();
+  size_t first = stem.size();
+  while (first > 0 && std::isdigit(static_cast<unsigned char>(stem[first - 1]))) --first;
+  if (first == stem.size() || stem.size() - first > 9) return -1;
+  return std::stol(stem.substr(first));
+}
+
 class ImageFolder : public FrameSource {
  public:
+  // Images in the order of their numbers (so that 2.png comes before 10.png); a file without a
+  // number, two files of one number, or a number missing between the first and the last is an
+  // error naming the frame.
   explicit ImageFolder(const fs::path& dir) : dir_(dir) {
+    std::vector<std::pair<long, std::string>> numbered;
     for (const auto& e : fs::directory_iterator(dir)) {
-      const std::string ext = e.path().extension().string();
+      std::string ext = e.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
       if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".tif" ||
                                   ext == ".tiff" || ext == ".pgm" || ext == ".ppm")) {
-        files_.push_back(e.path().string());
+        const long n = FrameNumber(e.path());
+        if (n < 0) throw Error(Str(e.path().string(), ": not a numbered frame (expected e.g. 000000.png, 000001.png, ...)"));
+        numbered.emplace_back(n, e.path().string());
       }
     }
-    std::sort(files_.begin(), files_.end());
-    if (files_.empty()) throw Error(Str(dir.string(), ": no images in the folder"));
+    if (numbered.empty()) throw Error(Str(dir.string(), ": no images in the folder"));
+    std::sort(numbered.begin(), numbered.end());
+    for (size_t i = 1; i < numbered.size(); ++i) {
+      const long a = numbered[i - 1].first, b = numbered[i].first;
+      if (a == b) throw Error(Str(dir.string(), ": frame ", b, " twice (", numbered[i - 1].second, ", ", numbered[i].second, ")"));
+      if (b != a + 1) {
+        throw Error(Str(dir.string(), ": frame ", a + 1, (b > a + 2 ? Str(" to ", b - 1) : std::string()), " missing (",
+                        fs::path(numbered[i - 1].second).filename().string(), " is followed by ",
+                        fs::path(numbered[i].second).filename().string(), ")"));
+      }
+    }
+    first_number_ = numbered.front().first;
+    for (auto& [n, file] : numbered) files_.push_back(std::move(file));
   }
+  long first_number() const override { return first_number_; }
+  void Skip(int frames) override { next_ = std::min(files_.size(), next_ + static_cast<size_t>(std::max(frames, 0))); }
   bool Read(cv::Mat* image) override {
     if (next_ >= files_.size()) return false;
     *image = cv::imread(files_[next_], cv::IMREAD_COLOR);
@@ -42,6 +73,7 @@ class ImageFolder : public FrameSource {
   fs::path dir_;
   std::vector<std::string> files_;
   size_t next_ = 0;
+  long first_number_ = 0;
 };
 
 class VideoFile : public FrameSource {
@@ -52,6 +84,10 @@ class VideoFile : public FrameSource {
     fps_ = capture_.get(cv::CAP_PROP_FPS);
   }
   bool Read(cv::Mat* image) override { return capture_.read(*image) && !image->empty(); }
+  void Skip(int frames) override {
+    cv::Mat ignored;
+    for (int i = 0; i < frames && capture_.grab(); ++i) {}
+  }
   int count() const override { return count_; }
   double fps() const override { return fps_; }
   std::string description() const override { return path_; }

@@ -82,6 +82,7 @@ struct DriveInput {
   Rig rig;
   std::unique_ptr<FrameSource> left, right;
   int frames = 0;
+  int skip_left = 0, skip_right = 0;  // frames before the first number both cameras have
   std::vector<double> times;
   CanLog can;
 };
@@ -92,24 +93,35 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
   in.rig = ReadRig((fs::path(drive_dir) / "rig.yaml").string());
   in.left = FrameSource::Open(drive_dir, "left");
   in.right = FrameSource::Open(drive_dir, "right");
-  in.frames = in.left->count();
-  if (in.left->count() != in.right->count()) {
-    if (!o.truncate) {
-      throw Error(Str(drive_dir, ": ", in.left->description(), " has ", in.left->count(), " frames, ",
-                      in.right->description(), " has ", in.right->count(), " (--truncate uses the shorter)"));
-    }
-    in.frames = std::min(in.left->count(), in.right->count());
-    s->warnings.push_back(Str("left and right differ in length; truncated to ", in.frames, " frames"));
+  // Left and right frames pair by number (image folders; videos carry none and start at 0).
+  const long l0 = in.left->first_number(), r0 = in.right->first_number();
+  const long first = std::max(l0, r0);
+  const long last = std::min(l0 + in.left->count(), r0 + in.right->count()) - 1;
+  if (l0 != r0 || in.left->count() != in.right->count()) {
+    const std::string frames = Str(in.left->description(), " has frames ", l0, "..", l0 + in.left->count() - 1, ", ",
+                                   in.right->description(), " has ", r0, "..", r0 + in.right->count() - 1);
+    if (!o.truncate) throw Error(Str(drive_dir, ": ", frames, " (--truncate keeps the frame numbers both have)"));
+    if (last < first) throw Error(Str(drive_dir, ": ", frames, ": no frame number in both"));
+    s->warnings.push_back(Str(frames, "; processing frames ", first, "..", last, ", those both have, as frames 0..", last - first));
   }
+  in.skip_left = static_cast<int>(first - l0);
+  in.skip_right = static_cast<int>(first - r0);
+  in.left->Skip(in.skip_left);
+  in.right->Skip(in.skip_right);
+  in.frames = static_cast<int>(last - first + 1);
+  const int offset = static_cast<int>(first - std::min(l0, r0));
   const fs::path frames_csv = fs::path(drive_dir) / "frames.csv";
   if (fs::exists(frames_csv)) {
+    // Frame k of frames.csv is image number (the smaller first number) + k.
     in.times = ReadFrameTimes(frames_csv.string());
-    if (static_cast<int>(in.times.size()) < in.frames) {
-      throw Error(Str(frames_csv.string(), ": ", in.times.size(), " frames listed, the videos have ", in.frames));
+    if (static_cast<int>(in.times.size()) < offset + in.frames) {
+      throw Error(Str(frames_csv.string(), ": ", in.times.size(), " frames listed, the images have ", offset + in.frames));
     }
+    in.times.erase(in.times.begin(), in.times.begin() + offset);
+    in.times.resize(in.frames);
   } else {
     const double fps = in.left->fps() > 0 ? in.left->fps() : o.image_fps;
-    for (int i = 0; i < in.frames; ++i) in.times.push_back(i / fps);
+    for (int i = 0; i < in.frames; ++i) in.times.push_back((offset + i) / fps);
   }
   in.can = ReadCanLog((fs::path(drive_dir) / "can.csv").string(), o.can);
   for (const std::string& w : in.can.warnings) s->warnings.push_back(w);
@@ -120,6 +132,7 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
 std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& camera, const DriveInput& in,
                                  double seconds) {
   std::unique_ptr<FrameSource> source = FrameSource::Open(drive_dir, camera.name);
+  source->Skip(camera.name == "left" ? in.skip_left : camera.name == "right" ? in.skip_right : 0);
   std::vector<cv::Mat> frames;
   cv::Mat image;
   for (int i = 0; i < in.frames && (i == 0 || in.times[i] - in.times[0] <= seconds); ++i) {

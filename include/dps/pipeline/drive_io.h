@@ -21,13 +21,18 @@ namespace dps {
 // One camera's frames, streamed (memory does not grow with the drive's length).
 class FrameSource {
  public:
-  // Opens <drive>/<camera>/ (numbered images, sorted by name) or <drive>/<camera>.<ext> (video).
-  // Throws dps::Error naming what is missing.
+  // Opens <drive>/<camera>/ (numbered images in the order of their numbers: 000000.png, ... or
+  // 0.png, 1.png, ...) or <drive>/<camera>.<ext> (video). Throws dps::Error naming what is missing,
+  // an image without a number, a frame number found twice or missing between the first and last.
   static std::unique_ptr<FrameSource> Open(const std::string& drive_dir, const std::string& camera);
   virtual ~FrameSource() = default;
   // The next frame, or false at the end. Throws dps::Error naming an unreadable image.
   virtual bool Read(cv::Mat* image) = 0;
   virtual int count() const = 0;       // frames in all (videos: as the container reports)
+  // The number of the first frame (image folders: its file's number; videos: 0).
+  virtual long first_number() const { return 0; }
+  // Skips the next `frames` frames.
+  virtual void Skip(int frames) = 0;
   virtual double fps() const = 0;      // 0 when unknown (image folders)
   virtual std::string description() const = 0;
 };

@@ -27,7 +27,7 @@ struct DriveOptions {
   MapOptions map;
   TrackerOptions tracker;
   OccupancyOptions occupancy;
-  bool truncate = false;          // left and right with different frame counts: use the shorter
+  bool truncate = false;          // left and right with different frames: keep the frame numbers both have
   // Cameras with no mask (neither masks/<camera>.png in the drive nor `mask:` in rig.yaml): estimate
   // what lies beyond the field from the drive's first mask_estimate_s seconds (EstimateFieldMask).
   bool estimate_masks = true;
