@@ -149,6 +149,21 @@ foreach(i 0 1 2)
 endforeach()
 process_bad(truncate_disjoint "right/ has 10..12: no frame number in both" --truncate)
 
+# can.csv that cannot be right: another clock or unit, speeds and yaw rates no car has
+broken(can_nanoseconds)
+file(WRITE "${WORK}/cases/can_nanoseconds/can.csv" "t,speed,yaw_rate\n1000000000,10,0\n2000000000,10,0\n")
+process_bad(can_nanoseconds "can_nanoseconds/can.csv: its times 1000000000..2000000000 s do not overlap the frames'")
+broken(can_speed_absurd)
+file(WRITE "${WORK}/cases/can_speed_absurd/can.csv" "t,speed,yaw_rate\n0,10,0\n0.05,1e300,0\n0.1,10,0\n")
+process_bad(can_speed_absurd "can_speed_absurd/can.csv:3: column 'speed': 1e\\+300 m/s is no road vehicle's speed")
+broken(can_yaw_degrees)
+file(WRITE "${WORK}/cases/can_yaw_degrees/can.csv" "t,speed,yaw_rate\n0,10,30\n0.1,10,30\n")
+process_bad(can_yaw_degrees "can_yaw_degrees/can.csv:2: column 'yaw_rate': 30 rad/s is no road vehicle's yaw rate")
+broken(rig_matrix_huge)
+string(REGEX REPLACE "rows: 3\n( *)cols: 3" "rows: 100000\n\\1cols: 100000" text "${good_rig}")
+file(WRITE "${WORK}/cases/rig_matrix_huge/rig.yaml" "${text}")
+process_bad(rig_matrix_huge "rig_matrix_huge/rig.yaml: camera 'left': field 'K': expected a 3x3 matrix, got 100000x100000")
+
 # Outputs that would destroy inputs, and options
 broken(out_is_drive)
 bad(out_is_drive "would be, contain or lie inside the input" "-" "${TOOLS}/dps-process" "${WORK}/cases/out_is_drive"
@@ -196,6 +211,15 @@ bad(marks_huge "marks_huge.csv:2: column 'line'" "${WORK}/cal.yaml" "${TOOLS}/dp
     --marks "${WORK}/marks_huge.csv" --out "${WORK}/cal.yaml")
 bad(calibrate_rig_endless "rig_endless/rig.yaml" "${WORK}/cal.yaml" "${TOOLS}/dps-calibrate"
     --rig "${WORK}/cases/rig_endless/rig.yaml" --marks "${WORK}/marks_huge.csv" --out "${WORK}/cal.yaml")
+file(WRITE "${WORK}/marks_same_point.csv" "camera,line,axis,u,v\nleft,1,Z,100,150\nleft,1,Z,100,150\nleft,1,Z,100,150\n")
+bad(marks_same_point "marks_same_point.csv: camera 'left': line 1: its 3 points span 0 px" "${WORK}/cal.yaml"
+    "${TOOLS}/dps-calibrate" --rig "${WORK}/good/rig.yaml" --marks "${WORK}/marks_same_point.csv" --out "${WORK}/cal.yaml")
+file(WRITE "${WORK}/det_nan.csv" "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n0,0,front,0,nan,5,5,-1,1,4,6,10\n")
+bad(detections_nan "det_nan.csv:2: column 'x': not a finite number" "-" "${TOOLS}/dps-eval" --detections "${WORK}/det_nan.csv"
+    --truth "${WORK}/good/truth.csv")
+file(WRITE "${WORK}/det_other.csv" "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n1,7.5,front,0,0,5,5,-1,1,4,6,10\n")
+bad(detections_other_drive "det_other.csv: frame 1 is at t = 7.5 s, in .*truth.csv at .*not the same drive" "-"
+    "${TOOLS}/dps-eval" --detections "${WORK}/det_other.csv" --truth "${WORK}/good/truth.csv")
 file(WRITE "${WORK}/det_huge.csv" "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n1e300,0,front,0,0,5,5,-1,1,4,6,10\n")
 bad(detections_huge "det_huge.csv:2: column 'frame'" "-" "${TOOLS}/dps-eval" --detections "${WORK}/det_huge.csv"
     --truth "${WORK}/good/truth.csv" --rig "${WORK}/good/rig.yaml")
@@ -206,6 +230,15 @@ bad(stereo_disparities "num_disparities" "${WORK}/disp.pfm" "${TOOLS}/dps-stereo
     "${WORK}/good/right/000000.png" --num-disparities 2147483647 --out "${WORK}/disp.pfm")
 bad(stereo_missing "absent.png" "${WORK}/disp.pfm" "${TOOLS}/dps-stereo" "${WORK}/absent.png"
     "${WORK}/good/right/000000.png" --num-disparities 16 --out "${WORK}/disp.pfm")
+
+# dps-rig
+bad(rig_import_format "unknown calibration format 'matlab'" "${WORK}/imported.yaml" "${TOOLS}/dps-rig" import --format matlab
+    "${WORK}/good/rig.yaml" --out "${WORK}/imported.yaml")
+file(WRITE "${WORK}/calib_results.txt" "#polynomial\n\n5 -266.588 0 1.22e-03 -5.78e-07 2.0e-09\n")
+bad(rig_import_truncated "calib_results.txt: field 'invpol \\(world2cam polynomial\\)': missing" "${WORK}/imported.yaml"
+    "${TOOLS}/dps-rig" import --format ocam "${WORK}/calib_results.txt" --out "${WORK}/imported.yaml")
+bad(rig_view_size "000000.png: 320x240, the calibration is for" "${WORK}/view.png" "${TOOLS}/dps-rig" view
+    "${SOURCE}/data/rigs/omni_pair.yaml" --camera left --image "${WORK}/good/left/000000.png" --out "${WORK}/view.png")
 
 # No temporary folder of a failed run is left behind.
 file(GLOB leftovers "${WORK}/out/.*" "${WORK}/.*tmp*")

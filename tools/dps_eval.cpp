@@ -69,13 +69,21 @@ int main(int argc, char** argv) {
     const std::vector<dps::TruthRow> truth = dps::ReadTruth(args.Get("truth"));
     std::string json, errors;
     if (args.Has("detections")) {
-      const dps::EvaluationResult r = dps::Evaluate(dps::ReadDetections(args.Get("detections")), truth, options);
+      const std::vector<dps::Detection> detections = dps::ReadDetections(args.Get("detections"));
+      std::vector<std::pair<int, double>> frames;
+      for (const dps::Detection& d : detections) frames.emplace_back(d.frame, d.t_s);
+      dps::CheckSameDrive(frames, truth, args.Get("detections"), args.Get("truth"));
+      const dps::EvaluationResult r = dps::Evaluate(detections, truth, options);
       std::cout << dps::EvaluationTable(r);
       json = dps::EvaluationJson(r);
       errors = dps::ScoringErrorsCsv(r);
     }
     if (args.Has("tracks")) {
-      const dps::TrackEvaluation r = dps::EvaluateTracks(dps::ReadTracks(args.Get("tracks")), truth, options);
+      const std::vector<dps::TrackState> tracks = dps::ReadTracks(args.Get("tracks"));
+      std::vector<std::pair<int, double>> frames;
+      for (const dps::TrackState& t : tracks) frames.emplace_back(t.frame, t.t_s);
+      dps::CheckSameDrive(frames, truth, args.Get("tracks"), args.Get("truth"));
+      const dps::TrackEvaluation r = dps::EvaluateTracks(tracks, truth, options);
       std::cout << "tracks:\n" << dps::EvaluationTable(r.positions);
       std::printf("velocity error median %.3f m/s; %d objects tracked, %d identity switches\n",
                   r.positions.overall.MedianVelocityError(), r.objects_tracked, r.id_switches);

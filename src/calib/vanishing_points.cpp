@@ -63,7 +63,8 @@ MarkedRays LineRays(const std::string& camera, const CameraModel& model, const s
 }
 
 // Eq. 9 per line: the great circle through its rays, with its residual in degrees and pixels.
-std::vector<LineFit> FitLines(const MarkedRays& marked, const CameraModel& model, const std::string& where) {
+std::vector<LineFit> FitLines(const MarkedRays& marked, const CameraModel& model, const CalibrationOptions& options,
+                              const std::string& where) {
   std::vector<LineFit> lines;
   for (const auto& [line, r] : marked.rays) {
     if (r.size() < 3) {
@@ -79,6 +80,15 @@ std::vector<LineFit> FitLines(const MarkedRays& marked, const CameraModel& model
     double scale = 0.0;
     for (const Eigen::Vector3d& p : r) scale += PixelsPerRadian(model, p, (fit.normal - fit.normal.dot(p) * p).normalized());
     fit.rms_px = rms * scale / r.size();
+    // A line's points must span enough of the image to give it a direction (a point marked again
+    // and again gives none).
+    double span_rad = 0.0;
+    for (const Eigen::Vector3d& p : r) span_rad = std::max(span_rad, std::acos(std::clamp(p.dot(r.front()), -1.0, 1.0)));
+    const double span_px = span_rad * scale / r.size();
+    if (!(span_px >= options.min_line_span_px)) {
+      throw Error(Str(where, ": line ", line, ": its ", r.size(), " points span ", span_px, " px (at least ",
+                      options.min_line_span_px, " px along the line are needed)"));
+    }
     lines.push_back(fit);
   }
   return lines;
@@ -181,6 +191,10 @@ void CalibrationOptions::Check() const {
   if (!(outlier_factor > 1.0)) throw Error(Str("outlier_factor = ", outlier_factor, ": violated constraint > 1"));
   if (!(outlier_min_deg >= 0.0)) throw Error(Str("outlier_min_deg = ", outlier_min_deg, ": violated constraint >= 0"));
   if (!(min_spread_deg > 0.0)) throw Error(Str("min_spread_deg = ", min_spread_deg, ": violated constraint > 0"));
+  if (!(min_line_span_px > 0.0)) throw Error(Str("min_line_span_px = ", min_line_span_px, ": violated constraint > 0"));
+  if (!(max_orthogonality_error_deg > 0.0 && max_orthogonality_error_deg <= 90.0)) {
+    throw Error(Str("max_orthogonality_error_deg = ", max_orthogonality_error_deg, ": violated constraint 0 < e <= 90"));
+  }
   if (!(degenerate_ratio > 0.0 && degenerate_ratio < 1.0)) {
     throw Error(Str("degenerate_ratio = ", degenerate_ratio, ": violated constraint 0 < ratio < 1"));
   }
@@ -193,7 +207,7 @@ CameraCalibration CalibrateCamera(const std::string& camera, const CameraModel& 
   const std::string where = Str(source, ": camera '", camera, "'");
   CameraCalibration out;
   out.camera = camera;
-  out.lines = FitLines(LineRays(camera, model, marks, source), model, where);
+  out.lines = FitLines(LineRays(camera, model, marks, source), model, options, where);
   MarkOutliers(options, &out.lines);
   const AxisRows rows = FitAxes(out.lines, nominal_R, options, where, &out.axes);
   // For the report: the missing row from the other two (right-handed: r1 x r2 = r3), and how far
@@ -208,6 +222,11 @@ CameraCalibration CalibrateCamera(const std::string& camera, const CameraModel& 
       const double angle = std::acos(std::clamp(full[i].dot(full[j]), -1.0, 1.0)) * kRadToDeg;
       out.orthogonality_error_deg = std::max(out.orthogonality_error_deg, std::abs(angle - 90.0));
     }
+  }
+  if (!(out.orthogonality_error_deg <= options.max_orthogonality_error_deg)) {
+    throw Error(Str(where, ": the vanishing points of the axes are ", out.orthogonality_error_deg,
+                    " deg from orthogonal (at most ", options.max_orthogonality_error_deg,
+                    "): the marked lines do not run along the vehicle's axes as their axis column says"));
   }
   // The nearest rotation to the measured rows (the paper's R = U V^T), each row weighted by how
   // well its vanishing point is determined (lines / spread^2; short pole lines count less). This

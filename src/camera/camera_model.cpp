@@ -63,8 +63,11 @@ void CameraModel::CheckCommon() const {
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) Require(std::isfinite(K_(r, c)), "K", K_(r, c), "finite");
   }
-  Require(K_(0, 0) > 0.0, "K[0][0] (fx)", K_(0, 0), "fx > 0");
-  Require(K_(1, 1) > 0.0, "K[1][1] (fy)", K_(1, 1), "fy > 0");
+  // A focal length of more than 1000 image sizes is a field of view under 0.06 degrees: no camera
+  // dps is for, but a unit error or a corrupt file.
+  const double max_focal = 1000.0 * std::max(width_, height_);
+  Require(K_(0, 0) > 0.0 && K_(0, 0) <= max_focal, "K[0][0] (fx)", K_(0, 0), Str("0 < fx <= ", max_focal, " (1000 image sizes)"));
+  Require(K_(1, 1) > 0.0 && K_(1, 1) <= max_focal, "K[1][1] (fy)", K_(1, 1), Str("0 < fy <= ", max_focal, " (1000 image sizes)"));
   Require(K_(1, 0) == 0.0, "K[1][0]", K_(1, 0), "== 0 (upper triangular)");
   Require(K_(2, 0) == 0.0, "K[2][0]", K_(2, 0), "== 0 (upper triangular)");
   Require(K_(2, 1) == 0.0, "K[2][1]", K_(2, 1), "== 0 (upper triangular)");

@@ -1,7 +1,10 @@
 #include "dps/detect/detection_io.h"
 
+#include <cmath>
+
 #include "dps/util/atomic_file.h"
 #include "dps/util/csv.h"
+#include "dps/util/error.h"
 
 namespace dps {
 
@@ -39,6 +42,12 @@ std::vector<Detection> ReadDetections(const std::string& path) {
     d.z_min_m = t.Number(r, z_min);
     d.z_max_m = t.Number(r, z_max);
     d.n_points = t.Integer(r, n);
+    const std::pair<const char*, double> numbers[] = {{"t", d.t_s}, {"x", d.x_m}, {"z", d.z_m}, {"range", d.range_m},
+                                                      {"x_min", d.x_min_m}, {"x_max", d.x_max_m}, {"z_min", d.z_min_m},
+                                                      {"z_max", d.z_max_m}};
+    for (const auto& [name, value] : numbers) {
+      if (!std::isfinite(value)) throw Error(Str(path, ":", t.Line(r), ": column '", name, "': not a finite number"));
+    }
     out.push_back(d);
   }
   return out;

@@ -1,6 +1,7 @@
 #include "dps/eval/evaluation.h"
 
 #include "dps/map/tracker.h"
+#include "dps/util/error.h"
 
 #include <algorithm>
 #include <cmath>
@@ -304,6 +305,34 @@ std::string ScoringErrorsCsv(const EvaluationResult& r) {
         << Number(e.point.x()) << ',' << Number(e.point.y()) << ',' << Number(e.range_m) << '\n';
   }
   return out.str();
+}
+
+void CheckSameDrive(const std::vector<std::pair<int, double>>& results, const std::vector<TruthRow>& truth,
+                    const std::string& results_file, const std::string& truth_file) {
+  if (truth.empty() || results.empty()) return;
+  std::map<int, double> truth_time;
+  for (const TruthRow& r : truth) truth_time.emplace(r.frame, r.t_s);
+  std::vector<double> steps;
+  for (auto it = truth_time.begin(), next = std::next(it); next != truth_time.end(); ++it, ++next) {
+    if (next->second > it->second) steps.push_back((next->second - it->second) / (next->first - it->first));
+  }
+  double tolerance = 1e-3;
+  if (!steps.empty()) {
+    std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+    tolerance = 0.5 * steps[steps.size() / 2];
+  }
+  const int last = truth_time.rbegin()->first;
+  for (const auto& [frame, t] : results) {
+    const auto it = truth_time.find(frame);
+    if (it != truth_time.end() && !(std::abs(it->second - t) <= tolerance)) {
+      throw Error(Str(results_file, ": frame ", frame, " is at t = ", t, " s, in ", truth_file, " at ", it->second,
+                      " s: not the same drive (or not the same clock)"));
+    }
+    if (frame > last + 1 && std::abs(t - truth_time.rbegin()->second) > tolerance) {
+      throw Error(Str(results_file, ": frame ", frame, " lies beyond ", truth_file, "'s last frame ", last,
+                      ": not the same drive"));
+    }
+  }
 }
 
 }  // namespace dps

@@ -129,6 +129,14 @@ CanLog ReadCanLog(const std::string& path, const CanLogFormat& f) {
       ++nan_rows;
       continue;
     }
+    if (std::abs(speed) > kMaxSpeedMps) {
+      throw Error(Str(path, ":", t.Line(r), ": column '", f.speed_column, "': ", speed, " m/s is no road vehicle's speed (at most ",
+                      kMaxSpeedMps, " m/s; another unit? see --speed-scale)"));
+    }
+    if (std::abs(yaw) > kMaxYawRateRadps) {
+      throw Error(Str(path, ":", t.Line(r), ": column '", f.yaw_rate_column, "': ", yaw, " rad/s is no road vehicle's yaw rate (at most ",
+                      kMaxYawRateRadps, " rad/s; degrees? see --yaw-scale)"));
+    }
     if (!samples.empty() && time < samples.back().t_s) {
       throw Error(Str(path, ":", t.Line(r), ": time ", time, " goes backwards (previous ", samples.back().t_s,
                       "); sort the log"));

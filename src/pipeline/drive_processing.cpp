@@ -125,6 +125,13 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
   }
   in.can = ReadCanLog((fs::path(drive_dir) / "can.csv").string(), o.can);
   for (const std::string& w : in.can.warnings) s->warnings.push_back(w);
+  // A log that covers none of the frames is on another clock or in another unit (nanoseconds,
+  // milliseconds): every frame would silently lose its motion.
+  if (in.frames > 0 && (in.can.t_end < in.times.front() || in.can.t_begin > in.times.back())) {
+    throw Error(Str((fs::path(drive_dir) / "can.csv").string(), ": its times ", in.can.t_begin, "..", in.can.t_end,
+                    " s do not overlap the frames' ", in.times.front(), "..", in.times.back(),
+                    " s (another clock or unit? frames.csv gives frame times on the CAN clock)"));
+  }
   return in;
 }
 

@@ -116,6 +116,13 @@ class FieldReader {
         got_cols = cols;
       }
     } else if (n.isMap()) {
+      // The size it claims, checked before OpenCV allocates it (a small file may ask for gigabytes).
+      const cv::FileNode nr = n["rows"], nc = n["cols"];
+      if (!nr.isInt() || !nc.isInt()) Fail(key, "an !!opencv-matrix needs integer rows and cols");
+      const long claimed = static_cast<long>(static_cast<int>(nr)) * static_cast<int>(nc);
+      if (claimed != static_cast<long>(rows) * cols) {
+        Fail(key, Str("expected a ", rows, "x", cols, " matrix, got ", static_cast<int>(nr), "x", static_cast<int>(nc)));
+      }
       cv::Mat m;
       try {
         n >> m;

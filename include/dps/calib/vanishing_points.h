@@ -50,6 +50,12 @@ struct CalibrationOptions {
   // Each vanishing direction is weighted by lines / max(spread, min_spread_deg)^2 in the final
   // nearest-rotation fit; degrees, > 0.
   double min_spread_deg = 0.01;
+  // A line's points must span at least this many pixels: marked with the paper's ~0.5 px noise,
+  // its direction is then known to about 1.5 degrees. > 0.
+  double min_line_span_px = 20.0;
+  // Vanishing points of the three axes measured further than this from orthogonal are not lines
+  // along the vehicle's axes (marking noise gives well under a degree); in (0, 90].
+  double max_orthogonality_error_deg = 5.0;
 
   // Throws dps::Error naming the field and the violated constraint.
   void Check() const;

@@ -74,6 +74,13 @@ struct EvaluationResult {
   std::vector<ScoringError> errors;  // by frame: missed objects, then false detections
 };
 
+// Throws dps::Error when results (frame, time pairs of detections or tracks, read from `results`)
+// and truth (read from `truth_file`) cannot be of one drive: a frame both list at times more than
+// half a frame interval apart (the truth's median interval; 1 ms when it has one frame), or a
+// result frame beyond the truth's last frame by more than one.
+void CheckSameDrive(const std::vector<std::pair<int, double>>& results, const std::vector<TruthRow>& truth,
+                    const std::string& results_file, const std::string& truth_file);
+
 // Scores detections against truth (frames matched by index).
 EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
                           const EvaluationOptions& options);

@@ -49,6 +49,12 @@ struct CanLogFormat {
   double max_gap_s = 0.5;             // longer gaps between samples: motion unknown there
 };
 
+// Bounds on what a road vehicle's CAN log can say: a speed above 100 m/s (360 km/h) or a yaw rate
+// above 3 rad/s (a car turning on the spot at walking pace stays under 1.5 rad/s) is another unit
+// or a corrupt log, and is refused rather than processed.
+constexpr double kMaxSpeedMps = 100.0;
+constexpr double kMaxYawRateRadps = 3.0;
+
 struct CanLog {
   MotionProfile profile;
   double t_begin = 0.0, t_end = 0.0;
@@ -57,8 +63,8 @@ struct CanLog {
 };
 
 // Reads a CAN log (and the optional gyro log). Throws dps::Error naming file, line and column for
-// missing columns, non-numbers, or time going backwards; NaN rows and duplicate times are
-// dropped with a warning.
+// missing columns, non-numbers, time going backwards, or a speed or yaw rate beyond the bounds
+// above; NaN rows and duplicate times are dropped with a warning.
 CanLog ReadCanLog(const std::string& path, const CanLogFormat& format = CanLogFormat());
 
 // The vehicle's pose at t1 in its frame at t0, when the log covers [t0, t1] without a long gap;
