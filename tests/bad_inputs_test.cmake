@@ -164,6 +164,17 @@ string(REGEX REPLACE "rows: 3\n( *)cols: 3" "rows: 100000\n\\1cols: 100000" text
 file(WRITE "${WORK}/cases/rig_matrix_huge/rig.yaml" "${text}")
 process_bad(rig_matrix_huge "rig_matrix_huge/rig.yaml: camera 'left': field 'K': expected a 3x3 matrix, got 100000x100000")
 
+# Paths with spaces and non-ASCII names: the error names them as they are.
+broken("drive with spåce")
+file(REMOVE "${WORK}/cases/drive with spåce/can.csv")
+process_bad("drive with spåce" "cases/drive with spåce/can.csv")
+broken(yaw_file_missing)
+process_bad(yaw_file_missing "no_such_gyro.csv" --yaw-file "${WORK}/cases/yaw_file_missing/no_such_gyro.csv")
+broken(left_video_garbage)
+file(REMOVE_RECURSE "${WORK}/cases/left_video_garbage/left")
+file(WRITE "${WORK}/cases/left_video_garbage/left.avi" "not a video")
+process_bad(left_video_garbage "left_video_garbage/left.avi: cannot open video")
+
 # Outputs that would destroy inputs, and options
 broken(out_is_drive)
 bad(out_is_drive "would be, contain or lie inside the input" "-" "${TOOLS}/dps-process" "${WORK}/cases/out_is_drive"

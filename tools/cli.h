@@ -82,9 +82,10 @@ class Args {
 // Runs a tool's body, printing any error as one line "tool: error: message" and returning 1.
 template <typename Body>
 int Run(const char* tool, Body&& body) {
-  // The tools report what went wrong themselves, in one line; OpenCV's warnings (e.g. imread's on a
-  // missing file) would add lines before it.
-  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
+  // The tools report what went wrong themselves, in one line; OpenCV's own messages (imread's
+  // warning on a missing file, a video backend's error while probing a file that is no video)
+  // would add lines before it.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   try {
     return body();
   } catch (const std::exception& e) {
