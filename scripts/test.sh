@@ -1,8 +1,19 @@
 #!/usr/bin/env bash
 # Runs the whole test suite: installs what is missing, builds (Release), runs CTest.
+#   scripts/test.sh              the suite (what CI runs)
+#   scripts/test.sh --sanitize   also an AddressSanitizer + UndefinedBehaviorSanitizer build in
+#                                build-sanitize/ running every test but the slow-labelled renders
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD_DIR=${DPS_BUILD_DIR:-$ROOT/build}
+JOBS=$(nproc 2>/dev/null || echo 2)
 "$ROOT/scripts/build.sh"
-cd "$BUILD_DIR"
-ctest --output-on-failure -j "$(nproc 2>/dev/null || echo 2)"
+(cd "$BUILD_DIR" && ctest --output-on-failure -j "$JOBS")
+if [ "${1:-}" = "--sanitize" ]; then
+  SAN_DIR=${DPS_SANITIZE_BUILD_DIR:-$ROOT/build-sanitize}
+  cmake -S "$ROOT" -B "$SAN_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPS_SANITIZE=ON -DDPS_BUILD_BENCHMARKS=OFF >/dev/null
+  cmake --build "$SAN_DIR" -j "$JOBS"
+  # Leaks are not errors (OpenCV's backends keep caches); any other report fails the test.
+  export ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+  (cd "$SAN_DIR" && ctest --output-on-failure -j "$JOBS" -LE slow)
+fi

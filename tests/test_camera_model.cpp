@@ -211,7 +211,7 @@ void TestBadParameters() {
   CHECK_THROWS_WITH(dps::CameraModel::Hyperbolic(640, 480, K, 1, -0.5), std::invalid_argument,
                     "'b'");
   CHECK_THROWS_WITH(dps::CameraModel::Unified(640, 480, MakeK(-100, 100, 320, 240), 0.5),
-                    std::invalid_argument, "fx > 0");
+                    std::invalid_argument, "0 < fx <=");
   CHECK_THROWS_WITH(dps::CameraModel::Unified(640, 480, K, -0.1), std::invalid_argument, "xi");
   CHECK_THROWS_WITH(dps::CameraModel::Fisheye(640, 480, K, {-0.5, 0, 0, 0}), std::invalid_argument,
                     "k1");

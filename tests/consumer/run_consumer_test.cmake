@@ -12,7 +12,7 @@ function(run)
 endfunction()
 
 run(${CMAKE_COMMAND} --install "${DPS_BUILD_DIR}" --prefix "${prefix}")
-foreach(tool dps-synth dps-calibrate dps-stereo dps-process dps-eval)
+foreach(tool dps-synth dps-calibrate dps-stereo dps-process dps-eval dps-rig)
   if(NOT EXISTS "${prefix}/bin/${tool}")
     message(FATAL_ERROR "the install has no ${prefix}/bin/${tool}")
   endif()
