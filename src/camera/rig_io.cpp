@@ -120,7 +120,12 @@ std::string FirstPresent(const FieldReader& f, std::initializer_list<const char*
 
 Rig ReadRig(const std::string& path) {
   cv::FileStorage fs = OpenForReading(path);
-  Rig rig = ParseRig(fs.root(), path);
+  Rig rig;
+  try {
+    rig = ParseRig(fs.root(), path);
+  } catch (const cv::Exception& e) {  // an OpenCV assertion on a node of an unexpected shape
+    throw Error(Str(path, ": malformed: ", OneLine(e)));
+  }
   // Masks named by the file, relative to its folder.
   for (RigCamera& c : rig.cameras) {
     if (c.mask_file.empty()) continue;

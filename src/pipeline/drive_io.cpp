@@ -85,7 +85,6 @@ class VideoFile : public FrameSource {
   }
   bool Read(cv::Mat* image) override { return capture_.read(*image) && !image->empty(); }
   void Skip(int frames) override {
-    cv::Mat ignored;
     for (int i = 0; i < frames && capture_.grab(); ++i) {}
   }
   int count() const override { return count_; }

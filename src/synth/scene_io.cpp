@@ -168,8 +168,21 @@ void ReadContents(const FieldReader& f, Scene* s) {
 
 }  // namespace
 
+namespace {
+Scene ParseScene(const cv::FileStorage& fs, const std::string& path);
+}  // namespace
+
 Scene ReadScene(const std::string& path) {
   cv::FileStorage fs = internal::OpenForReading(path);
+  try {
+    return ParseScene(fs, path);
+  } catch (const cv::Exception& e) {  // an OpenCV assertion on a node of an unexpected shape
+    throw Error(Str(path, ": malformed: ", internal::OneLine(e)));
+  }
+}
+
+namespace {
+Scene ParseScene(const cv::FileStorage& fs, const std::string& path) {
   const FieldReader f(fs.root(), path);
   Scene s;
   s.name = f.TextOr("name", std::filesystem::path(path).stem().string());
@@ -231,5 +244,6 @@ Scene ReadScene(const std::string& path) {
   }
   return s;
 }
+}  // namespace
 
 }  // namespace dps

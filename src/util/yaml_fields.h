@@ -47,13 +47,15 @@ class FieldReader {
   FieldReader(const cv::FileNode& node, std::string where)
       : node_(node), where_(std::move(where)) {}
 
-  bool Has(const std::string& key) const { return !node_[key].empty(); }
+  // (cv::FileNode::operator[] asserts on a node that is not a map: such a node has no fields.)
+  bool Has(const std::string& key) const { return node_.isMap() && !node_[key].empty(); }
 
   [[noreturn]] void Fail(const std::string& key, const std::string& problem) const {
     throw Error(Str(where_, ": field '", key, "': ", problem));
   }
 
   cv::FileNode Required(const std::string& key) const {
+    if (!node_.isMap()) throw Error(Str(where_, ": expected a map of fields (looking for '", key, "')"));
     cv::FileNode n = node_[key];
     if (n.empty()) Fail(key, "missing");
     return n;
