@@ -238,11 +238,16 @@ int Check(const dps_cli::Args& args, const dps::Rig& rig) {
   if (!args.Has("images") || !args.Has("out")) throw dps::Error("check: needs --images NAME=IMAGE,... and --out DIR");
   const std::string dir = args.Get("out"), ext = args.Get("ext", "png");
   if (ext != "png" && ext != "jpg") throw dps::Error("option --ext: expected png or jpg, got '" + ext + "'");
-  dps::CheckOutputFolder(dir, {args.positional()[1]});
-  std::filesystem::create_directories(dir);
+  std::vector<std::string> inputs{args.positional()[1]};
   for (const std::string& item : SplitList(args.Get("images"))) {
     const size_t eq = item.find('=');
     if (eq == std::string::npos) throw dps::Error("option --images: expected NAME=IMAGE, got '" + item + "'");
+    inputs.push_back(item.substr(eq + 1));
+  }
+  dps::CheckOutputFolder(dir, inputs);
+  std::filesystem::create_directories(dir);
+  for (const std::string& item : SplitList(args.Get("images"))) {
+    const size_t eq = item.find('=');
     const dps::RigCamera& c = rig.Camera(item.substr(0, eq));
     const cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, item.substr(eq + 1), c.model), args.Number("range", 20.0),
                                             args.Number("grid", 1.0));

@@ -400,9 +400,9 @@ std::vector<Source> ReadKitti360(const ImportOptions& o) {
       poses_file = file;
       continue;
     }
-    Source s{"", ReadKitti360Fisheye(file, nullptr), std::nullopt, ""};
-    ReadKitti360Fisheye(file, &s.name);
-    sources.push_back(std::move(s));
+    std::string name;
+    CameraModel model = ReadKitti360Fisheye(file, &name);
+    sources.push_back(Source{name, std::move(model), std::nullopt, ""});
   }
   for (Source& s : sources) {
     const auto it = poses.find(s.name);
