@@ -596,7 +596,27 @@ void TestPoleBeyondCar() {
   CHECK_EQ(with_rule, 1);
 }
 
+// Every detector and pipeline setting is checked: a value out of range is an error naming it.
+void TestOptionChecks() {
+  const dps::Rig rig = dps::ReadRig(std::string(DPS_SOURCE_DIR) + "/data/rigs/omni_pair.yaml");
+  dps::PipelineOptions o = dps::DefaultPipelineOptions(rig);
+  o.Check();  // the defaults are valid
+  dps::PipelineOptions bad = o;
+  bad.front.temporal_forgetting = 0.0;
+  CHECK_THROWS_WITH(bad.Check(), dps::Error, "front detector option temporal_forgetting = 0");
+  bad = o;
+  bad.side.horizon_fraction = 1.5;
+  CHECK_THROWS_WITH(bad.Check(), dps::Error, "side detector option horizon_fraction = 1.5");
+  bad = o;
+  bad.vehicle_width_m = -1.0;
+  CHECK_THROWS_WITH(dps::SurroundPipeline(rig, bad), dps::Error, "pipeline option vehicle_width_m = -1");
+  bad = o;
+  bad.side.stereo.num_disparities = 0;
+  CHECK_THROWS_WITH(dps::SideDetector(rig, "left", dps::Side::kLeft, bad.side), dps::Error, "num_disparities");
+}
+
 int main() {
+  TestOptionChecks();
   TestHistogram();
   TestLinking();
   TestFrontProjection();

@@ -13,7 +13,32 @@
 #include "dps/util/image.h"
 
 namespace dps {
+void FrontDetectorOptions::Check() const {
+  const OptionCheck Require("front detector");
+  Require(view_width > 0 && view_width <= 8192, "view_width", view_width, "1..8192 px");
+  Require(view_height > 0 && view_height <= 8192, "view_height", view_height, "1..8192 px");
+  Require(focal_px > 0 && focal_px <= 100.0 * view_width, "focal_px", focal_px, "> 0 and at most 100 view widths");
+  Require(link_max_gap >= 0, "link_max_gap", link_max_gap, ">= 0 columns");
+  Require(link_max_gap_m >= 0, "link_max_gap_m", link_max_gap_m, ">= 0");
+  Require(link_max_top_difference_m >= 0, "link_max_top_difference_m", link_max_top_difference_m, ">= 0");
+  Require(link_free_gap_m >= 0, "link_free_gap_m", link_free_gap_m, ">= 0");
+  Require(link_vehicle_length_m >= 0, "link_vehicle_length_m", link_vehicle_length_m, ">= 0 (0 = no test)");
+  Require(reference_overlap_m >= 0, "reference_overlap_m", reference_overlap_m, ">= 0");
+  Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
+  Require(own_car_height_m >= 0, "own_car_height_m", own_car_height_m, ">= 0");
+  Require(min_obstacle_height_m >= 0, "min_obstacle_height_m", min_obstacle_height_m, ">= 0");
+  Require(tall_min_columns >= 0, "tall_min_columns", tall_min_columns, ">= 0");
+  Require(tall_min_top_m >= 0, "tall_min_top_m", tall_min_top_m, ">= 0");
+  Require(drift_interval >= 0, "drift_interval", drift_interval, ">= 0 (0 = never)");
+  Require(drift_min_px >= 0, "drift_min_px", drift_min_px, ">= 0");
+  Require(drift_min_features >= 1, "drift_min_features", drift_min_features, ">= 1");
+  Require(temporal_max_variance_px2 >= 0, "temporal_max_variance_px2", temporal_max_variance_px2, ">= 0 (0 = off)");
+  Require(temporal_forgetting > 0 && temporal_forgetting <= 1, "temporal_forgetting", temporal_forgetting, "0 < f <= 1");
+  stereo.Check();
+}
+
 FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options) : options_(options), rig_(rig) {
+  options.Check();
   options_.histogram.min_disparity = options.stereo.min_disparity;
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = false;

@@ -171,9 +171,34 @@ SideDetectorOptions::SideDetectorOptions() {
   histogram.min_columns = 10;  // nearby vehicles fill much of a side view; small blobs are road
 }
 
+void SideDetectorOptions::Check() const {
+  const OptionCheck Require("side detector");
+  Require(view_width > 0 && view_width <= 8192, "view_width", view_width, "1..8192 px");
+  Require(view_height > 0 && view_height <= 8192, "view_height", view_height, "1..8192 px");
+  Require(focal_px > 0 && focal_px <= 100.0 * view_width, "focal_px", focal_px, "> 0 and at most 100 view widths");
+  Require(horizon_fraction > 0 && horizon_fraction < 1, "horizon_fraction", horizon_fraction, "0 < h < 1");
+  Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
+  Require(max_depth_m > 0, "max_depth_m", max_depth_m, "> 0");
+  Require(own_car_height_m >= 0, "own_car_height_m", own_car_height_m, ">= 0");
+  Require(min_baseline_m > 0, "min_baseline_m", min_baseline_m, "> 0");
+  Require(min_obstacle_height_m >= 0, "min_obstacle_height_m", min_obstacle_height_m, ">= 0");
+  Require(min_static_distance_m > 0, "min_static_distance_m", min_static_distance_m, "> 0");
+  Require(min_view_scale > 0 && min_view_scale <= 1, "min_view_scale", min_view_scale, "0 < s <= 1");
+  Require(motion_tolerance > 0, "motion_tolerance", motion_tolerance, "> 0");
+  Require(min_motion_disparity_px >= 0, "min_motion_disparity_px", min_motion_disparity_px, ">= 0");
+  Require(max_contact_jump_m > 0, "max_contact_jump_m", max_contact_jump_m, "> 0");
+  Require(disparity_sigma_px > 0, "disparity_sigma_px", disparity_sigma_px, "> 0");
+  Require(max_gap_below_m >= 0, "max_gap_below_m", max_gap_below_m, ">= 0");
+  Require(contact_tolerance_px >= 0, "contact_tolerance_px", contact_tolerance_px, ">= 0");
+  Require(contact_trim_rows >= 0 && contact_trim_rows < view_height, "contact_trim_rows", contact_trim_rows, "0 <= rows < view_height");
+  Require(pacing_road_contrast_px > 0, "pacing_road_contrast_px", pacing_road_contrast_px, "> 0");
+  stereo.Check();
+}
+
 SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
                            const SideDetectorOptions& options)
     : camera_(rig.Camera(camera)), side_(side), vehicle_(rig.vehicle), options_(options) {
+  options.Check();
   options_.histogram.min_disparity = options.stereo.min_disparity;
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = true;

@@ -100,8 +100,17 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
   return c;
 }
 
+void PipelineOptions::Check() const {
+  const OptionCheck Require("pipeline");
+  Require(merge_distance_m >= 0, "merge_distance_m", merge_distance_m, ">= 0");
+  Require(vehicle_length_m >= 0, "vehicle_length_m", vehicle_length_m, ">= 0 (0 = no merging)");
+  Require(vehicle_width_m >= 0, "vehicle_width_m", vehicle_width_m, ">= 0");
+  front.Check();
+  side.Check();
+}
+
 SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& options)
-    : rig_(rig), options_(options), coverage_(PipelineCoverage(rig, options)) {
+    : rig_(rig), options_((options.Check(), options)), coverage_(PipelineCoverage(rig, options)) {
   // Where each source looks from (the sectors' apexes), for MergeVehicleParts' see-through test.
   for (const Sector& s : coverage_.sectors) viewpoints_[s.name] = s.apex;
   front_ = std::make_unique<FrontDetector>(rig, options.front);

@@ -65,6 +65,10 @@ struct FrontDetectorOptions {
   // by more than this variance are suppressed; 0 = off.
   double temporal_max_variance_px2 = 4.0;
   double temporal_forgetting = 0.5;
+
+  // Throws dps::Error naming the field, its value and the violated constraint (the stereo and
+  // histogram options included).
+  void Check() const;
 };
 
 // The matching with one view as the reference, in that view's columns.

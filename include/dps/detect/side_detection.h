@@ -82,6 +82,9 @@ struct SideDetectorOptions {
   double pacing_road_contrast_px = 5.0;
 
   SideDetectorOptions();
+  // Throws dps::Error naming the field, its value and the violated constraint (the stereo and
+  // histogram options included).
+  void Check() const;
 };
 
 struct SideResult {

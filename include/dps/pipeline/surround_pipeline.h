@@ -27,6 +27,10 @@ struct PipelineOptions {
   double vehicle_length_m = 5.5;
   double vehicle_width_m = 2.2;
   bool vehicle_across_sources_only = false;
+
+  // Throws dps::Error naming the field, its value and the violated constraint (the detectors'
+  // options included).
+  void Check() const;
 };
 
 // Options scaled to the rig's image size: at 640 px wide omni images, 400x200 views with a focal
