@@ -16,6 +16,7 @@
 #include "dps/detect/front_detection.h"
 #include "dps/eval/evaluation.h"
 #include "dps/pipeline/surround_pipeline.h"
+#include "dps/pipeline/drive_processing.h"
 #include "dps/stereo/sad_stereo.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/synth.h"
@@ -613,6 +614,21 @@ void TestOptionChecks() {
   bad = o;
   bad.side.stereo.num_disparities = 0;
   CHECK_THROWS_WITH(dps::SideDetector(rig, "left", dps::Side::kLeft, bad.side), dps::Error, "num_disparities");
+  // The drive's, the map's and the evaluation's options too.
+  dps::DriveOptions drive;
+  drive.Check();
+  drive.image_fps = 0.0;
+  CHECK_THROWS_WITH(drive.Check(), dps::Error, "drive option image_fps = 0");
+  drive = dps::DriveOptions();
+  drive.map.size_px = 3;
+  CHECK_THROWS_WITH(drive.Check(), dps::Error, "map option size_px = 3");
+  drive = dps::DriveOptions();
+  drive.default_pipeline = false;
+  drive.pipeline = bad;
+  CHECK_THROWS_WITH(dps::ProcessDrive("nowhere", "nowhere_out", drive), dps::Error, "num_disparities");
+  dps::EvaluationOptions evaluation;
+  evaluation.max_range_m = 0.0;
+  CHECK_THROWS_WITH(dps::Evaluate({}, {}, evaluation), dps::Error, "evaluation option max_range_m = 0");
 }
 
 int main() {

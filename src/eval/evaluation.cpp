@@ -173,6 +173,7 @@ double SourceScore::Precision() const { return detections ? double(matched) / de
 
 EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
                           const EvaluationOptions& options) {
+  options.Check();
   EvaluationResult result = EmptyResult(options);
   const auto in_zone = [&](const Eigen::Vector2d& p) {
     return p.norm() <= options.max_range_m && options.coverage.Contains(p);
@@ -333,6 +334,11 @@ void CheckSameDrive(const std::vector<std::pair<int, double>>& results, const st
                       ": not the same drive"));
     }
   }
+}
+
+void EvaluationOptions::Check() const {
+  const OptionCheck Require("evaluation");
+  Require(max_range_m > 0 && max_range_m <= 1000, "max_range_m", max_range_m, "0 < range <= 1000 m");
 }
 
 }  // namespace dps

@@ -1,5 +1,7 @@
 #include "dps/map/surround_map.h"
 
+#include "dps/util/error.h"
+
 #include <cmath>
 #include <limits>
 
@@ -200,6 +202,13 @@ cv::Mat DrawDiagnostics(const std::string& title, const cv::Mat& reference, cons
   cv::hconcat(Panel(hist_colour, panel, "column histogram"), Panel(obst_colour, panel, "obstacles"), bottom);
   cv::vconcat(std::vector<cv::Mat>{top, middle, bottom}, out);
   return out;
+}
+
+void MapOptions::Check() const {
+  const OptionCheck Require("map");
+  Require(size_px >= 16 && size_px <= 8192, "size_px", size_px, "16..8192");
+  Require(range_m > 0 && range_m <= 1000, "range_m", range_m, "0 < range <= 1000 m");
+  Require(ring_step_m > 0 && range_m / ring_step_m <= 1000, "ring_step_m", ring_step_m, "> 0, at most 1000 rings");
 }
 
 }  // namespace dps

@@ -159,7 +159,6 @@ std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& 
 std::map<std::string, cv::Mat> AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput* in,
                                            DriveSummary* s) {
   std::map<std::string, cv::Mat> valid_masks;
-  if (!(o.mask_estimate_s > 0)) throw Error(Str("drive option mask_estimate_s = ", o.mask_estimate_s, ": expected > 0"));
   for (RigCamera& camera : in->rig.cameras) {
     if (camera.name != "left" && camera.name != "right") continue;
     const fs::path file = fs::path(drive_dir) / "masks" / (camera.name + ".png");
@@ -430,8 +429,23 @@ void DriveRun::WriteFiles() {
 
 }  // namespace
 
+void DriveOptions::Check() const {
+  const OptionCheck Require("drive");
+  Require(image_fps > 0 && image_fps <= 10000, "image_fps", image_fps, "0 < fps <= 10000");
+  Require(mask_estimate_s > 0, "mask_estimate_s", mask_estimate_s, "> 0");
+  Require(can.max_gap_s > 0, "can.max_gap_s", can.max_gap_s, "> 0");
+  Require(std::isfinite(can.speed_scale) && can.speed_scale != 0, "can.speed_scale", can.speed_scale, "finite and != 0");
+  Require(std::isfinite(can.yaw_rate_scale), "can.yaw_rate_scale", can.yaw_rate_scale, "finite");
+  if (!default_pipeline) pipeline.Check();
+  map.Check();
+  tracker.Check();
+  occupancy.Check();
+  field_mask.Check();
+}
+
 DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_root, const DriveOptions& o,
                           const std::function<void(int, int)>& progress) {
+  o.Check();
   const auto start = Clock::now();
   DriveSummary s;
   s.output_dir = DriveOutputDir(drive_dir, out_root);

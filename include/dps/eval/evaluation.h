@@ -30,6 +30,9 @@ namespace dps {
 struct EvaluationOptions {
   double max_range_m = 20.0;   // > 0
   Coverage coverage;
+
+  // Throws dps::Error naming the field, its value and the violated constraint.
+  void Check() const;
 };
 
 struct BandScore {

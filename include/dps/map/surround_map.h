@@ -17,9 +17,12 @@
 namespace dps {
 
 struct MapOptions {
-  int size_px = 600;       // square picture, > 0
+  int size_px = 600;       // square picture, 16..8192
   double range_m = 30.0;   // from the centre to the border, > 0
-  double ring_step_m = 5.0;
+  double ring_step_m = 5.0;  // > 0
+
+  // Throws dps::Error naming the field, its value and the violated constraint.
+  void Check() const;
 };
 
 // What every frame's map shares: coverage shading, range rings, the own car, the scale bar.

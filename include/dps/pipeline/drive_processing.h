@@ -33,6 +33,10 @@ struct DriveOptions {
   bool estimate_masks = true;
   double mask_estimate_s = 2.0;   // > 0
   FieldMaskOptions field_mask;
+
+  // Throws dps::Error naming the field, its value and the violated constraint (the nested options
+  // included; `pipeline` only when it is used).
+  void Check() const;
 };
 
 // Where a camera's mask came from, and the share of its pixels that see the world.
