@@ -50,12 +50,14 @@ struct CalibrationOptions {
   // Each vanishing direction is weighted by lines / max(spread, min_spread_deg)^2 in the final
   // nearest-rotation fit; degrees, > 0.
   double min_spread_deg = 0.01;
-  // A line's points must span at least this many pixels: marked with the paper's ~0.5 px noise,
-  // its direction is then known to about 1.5 degrees. > 0.
-  double min_line_span_px = 20.0;
-  // Vanishing points of the three axes measured further than this from orthogonal are not lines
-  // along the vehicle's axes (marking noise gives well under a degree); in (0, 90].
-  double max_orthogonality_error_deg = 5.0;
+  // A line whose points span less than this coincide (one point marked again, below any marking
+  // tool's precision) and give the line no direction. Short real lines are kept: automatic marks
+  // near the edge of a 320x240 omni image span under a pixel. > 0.
+  double min_line_span_px = 0.01;
+  // Vanishing points of the three axes further than this from orthogonal are closer to another
+  // axis than to their own: the marks are not lines along the axes their `axis` column names.
+  // (Real marks at 320x240 reach 7 degrees, which the nearest-rotation fit absorbs.) In (0, 90].
+  double max_orthogonality_error_deg = 45.0;
 
   // Throws dps::Error naming the field and the violated constraint.
   void Check() const;
