@@ -13,7 +13,7 @@ shared="$here/../shared/data/real_calibrations"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 mkdir -p "$out"
-quiet() { "$@" >/dev/null 2>&1 || { echo "failed: $*" >&2; "$@"; }; }
+quiet() { local log; log=$("$@" 2>&1) || { echo "failed: $*" >&2; echo "$log" >&2; return 1; }; }
 
 # The mirror camera (its calibration is for columns 300..1599 of the 1920x1080 frame).
 quiet "$rig_tool" import --format ocam "$data/ocam_catadioptric_kuanli/calib_results.txt" --name left --out "$work/mirror.yaml"

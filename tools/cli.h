@@ -4,13 +4,17 @@
 // positional. Unknown options are errors. Tools print `Usage()` for --help.
 #pragma once
 
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <map>
 #include <set>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include <opencv2/core.hpp>
 #include <opencv2/core/utils/logger.hpp>
 
 #include "dps/util/error.h"
@@ -72,6 +76,34 @@ class Args {
     return static_cast<int>(d);
   }
   const std::vector<std::string>& positional() const { return positional_; }
+  // An image size "WxH" (each at least min_px), or the fallback when the option is absent.
+  cv::Size Size(const std::string& name, cv::Size fallback, int min_px = 1) const {
+    if (!Has(name)) return fallback;
+    const std::string v = Get(name);
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(v.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < min_px || h < min_px ||
+        w > 65536 || h > 65536) {
+      throw dps::Error("option --" + name + ": expected WxH, e.g. 640x480, got '" + v + "'");
+    }
+    return {w, h};
+  }
+  // "left=a.png,right=b.png" -> {(left, a.png), (right, b.png)}; `what` names the value in the
+  // error ("IMAGE"). Empty when the option is absent.
+  std::vector<std::pair<std::string, std::string>> Pairs(const std::string& name, const std::string& what) const {
+    std::vector<std::pair<std::string, std::string>> out;
+    if (!Has(name)) return out;
+    std::stringstream ss(Get(name));
+    for (std::string item; std::getline(ss, item, ',');) {
+      const size_t eq = item.find('=');
+      if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) {
+        throw dps::Error("option --" + name + ": expected CAMERA=" + what + ", got '" + item + "'");
+      }
+      out.emplace_back(item.substr(0, eq), item.substr(eq + 1));
+    }
+    if (out.empty()) throw dps::Error("option --" + name + ": nothing given");
+    return out;
+  }
 
  private:
   bool help_ = false;

@@ -42,21 +42,6 @@ within a few degrees (docs/calibration.md).
   --help                 this text
 )";
 
-// "left=a.png,right=b.png" -> {(left, a.png), (right, b.png)}.
-std::vector<std::pair<std::string, std::string>> ParseImages(const std::string& list) {
-  std::vector<std::pair<std::string, std::string>> out;
-  std::stringstream ss(list);
-  for (std::string item; std::getline(ss, item, ',');) {
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) {
-      throw dps::Error("--images: expected CAMERA=IMAGE, got '" + item + "'");
-    }
-    out.emplace_back(item.substr(0, eq), item.substr(eq + 1));
-  }
-  if (out.empty()) throw dps::Error("--images: no images given");
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -84,7 +69,7 @@ int main(int argc, char** argv) {
       marks = dps::ReadMarks(source);
     } else {
       source = "--images";
-      for (const auto& [camera, path] : ParseImages(args.Get("images"))) {
+      for (const auto& [camera, path] : args.Pairs("images", "IMAGE")) {
         if (!std::filesystem::is_regular_file(path)) throw dps::Error(path + ": cannot read the image (no such file)");
         const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
         if (image.empty()) throw dps::Error(path + ": cannot read the image");

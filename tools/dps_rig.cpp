@@ -13,6 +13,7 @@
 #include "dps/camera/rig_report.h"
 #include "dps/stereo/virtual_view.h"
 #include "dps/util/atomic_file.h"
+#include "dps/util/image.h"
 
 namespace {
 
@@ -89,31 +90,6 @@ std::vector<double> Numbers(const std::string& option, const std::string& text) 
   return out;
 }
 
-cv::Size ParseSize(const std::string& option, const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  std::istringstream in(text);
-  if (!(in >> w >> x >> h) || x != 'x' || (in >> extra) || w <= 0 || h <= 0 || w > 65536 || h > 65536) {
-    throw dps::Error("option --" + option + ": expected WxH, e.g. 640x480, got '" + text + "'");
-  }
-  return {w, h};
-}
-
-// Writes an image under its final name only once it is complete.
-void WriteImage(const std::string& path, const cv::Mat& image) {
-  const std::string tmp = dps::TemporaryPathFor(path);
-  bool written = false;
-  try {
-    written = cv::imwrite(tmp, image);
-  } catch (const cv::Exception&) {
-  }
-  if (!written) {
-    std::filesystem::remove(tmp);
-    throw dps::Error(path + ": cannot write the image (folder missing, or not a .png/.jpg name?)");
-  }
-  dps::RenameReplacing(tmp, path);
-}
-
 int Import(const dps_cli::Args& args) {
   if (!args.Has("format")) throw dps::Error("import: missing --format (see --help)");
   if (!args.Has("out")) throw dps::Error("import: missing --out rig.yaml");
@@ -123,17 +99,20 @@ int Import(const dps_cli::Args& args) {
   o.names = SplitList(args.Get("name"));
   o.vehicle.length_m = args.Number("vehicle-length", o.vehicle.length_m);
   o.vehicle.width_m = args.Number("vehicle-width", o.vehicle.width_m);
-  if (args.Has("size")) o.size = ParseSize("size", args.Get("size"));
+  o.size = args.Size("size", cv::Size());
   if (args.Has("origin")) {
     const std::vector<double> v = Numbers("origin", args.Get("origin"));
     if (v.size() != 3) throw dps::Error("option --origin: expected X,Y,Z");
     o.source_origin = Eigen::Vector3d(v[0], v[1], v[2]);
   }
-  for (const std::string& item : SplitList(args.Get("bev-height"))) {
-    const size_t eq = item.find('=');
-    const std::vector<double> h = Numbers("bev-height", eq == std::string::npos ? item : item.substr(eq + 1));
-    if (h.size() != 1) throw dps::Error("option --bev-height: expected H or CAMERA=H, got '" + item + "'");
-    if (eq == std::string::npos) o.bev_height_m = h[0]; else o.bev_height_by_camera[item.substr(0, eq)] = h[0];
+  if (args.Get("bev-height").find('=') == std::string::npos) {
+    o.bev_height_m = args.Number("bev-height", 0.0);
+  } else {
+    for (const auto& [camera, h] : args.Pairs("bev-height", "H")) {
+      const std::vector<double> v = Numbers("bev-height", h);
+      if (v.size() != 1) throw dps::Error("option --bev-height: expected H or CAMERA=H,..., got '" + h + "'");
+      o.bev_height_by_camera[camera] = v[0];
+    }
   }
   o.source_unit_m = args.Number("unit-m", 1.0);
   const std::string axis = args.Get("axis", "down");
@@ -151,7 +130,7 @@ int Import(const dps_cli::Args& args) {
 int Show(const dps_cli::Args& args, const dps::Rig& rig) {
   std::cout << dps::RigSummary(rig);
   if (args.Has("out")) {
-    WriteImage(args.Get("out"), dps::DrawRigFootprints(rig, args.Number("range", 12.0)));
+    dps::WriteImageAtomically(args.Get("out"), dps::DrawRigFootprints(rig, args.Number("range", 12.0)));
     std::cerr << "footprints: " << args.Get("out") << "\n";
   }
   return 0;
@@ -238,21 +217,17 @@ int Check(const dps_cli::Args& args, const dps::Rig& rig) {
   if (!args.Has("images") || !args.Has("out")) throw dps::Error("check: needs --images NAME=IMAGE,... and --out DIR");
   const std::string dir = args.Get("out"), ext = args.Get("ext", "png");
   if (ext != "png" && ext != "jpg") throw dps::Error("option --ext: expected png or jpg, got '" + ext + "'");
+  const auto images = args.Pairs("images", "IMAGE");
   std::vector<std::string> inputs{args.positional()[1]};
-  for (const std::string& item : SplitList(args.Get("images"))) {
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos) throw dps::Error("option --images: expected NAME=IMAGE, got '" + item + "'");
-    inputs.push_back(item.substr(eq + 1));
-  }
+  for (const auto& [camera, image] : images) inputs.push_back(image);
   dps::CheckOutputFolder(dir, inputs);
   std::filesystem::create_directories(dir);
-  for (const std::string& item : SplitList(args.Get("images"))) {
-    const size_t eq = item.find('=');
-    const dps::RigCamera& c = rig.Camera(item.substr(0, eq));
-    const cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, item.substr(eq + 1), c.model), args.Number("range", 20.0),
+  for (const auto& [camera, image] : images) {
+    const dps::RigCamera& c = rig.Camera(camera);
+    const cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, image, c.model), args.Number("range", 20.0),
                                             args.Number("grid", 1.0));
     const std::string out = (std::filesystem::path(dir) / ("check_" + c.name + "." + ext)).string();
-    WriteImage(out, drawn);
+    dps::WriteImageAtomically(out, drawn);
     std::cerr << c.name << ": " << out << "\n";
   }
   return 0;
@@ -262,7 +237,7 @@ int View(const dps_cli::Args& args, const dps::Rig& rig) {
   if (!args.Has("image") || !args.Has("out")) throw dps::Error("view: needs --image IMAGE and --out VIEW.png");
   const dps::RigCamera& c = rig.Camera(args.Get("camera"));
   const cv::Mat image = ReadImage(args, args.Get("image"), c.model);
-  const cv::Size size = ParseSize("size", args.Get("size", "640x480"));
+  const cv::Size size = args.Size("size", cv::Size(640, 480));
   const double fov = args.Number("fov-deg", 90.0) * M_PI / 180.0;
   if (!(fov > 0.0 && fov < M_PI * 0.99)) throw dps::Error("option --fov-deg: expected between 0 and 178 degrees");
   const double yaw = args.Number("yaw-deg", 0.0) * M_PI / 180.0, pitch = args.Number("pitch-deg", 0.0) * M_PI / 180.0;
@@ -278,7 +253,7 @@ int View(const dps_cli::Args& args, const dps::Rig& rig) {
   if (!x.allFinite()) throw dps::Error("view: looking straight up or down; give a pitch below 90 degrees");
   spec.vehicle_from_view << x, z.cross(x), z;
   spec.Check();
-  WriteImage(args.Get("out"), dps::VirtualView(c, spec).Render(image));
+  dps::WriteImageAtomically(args.Get("out"), dps::VirtualView(c, spec).Render(image));
   return 0;
 }
 

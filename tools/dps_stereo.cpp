@@ -8,6 +8,7 @@
 #include "dps/stereo/disparity_io.h"
 #include "dps/stereo/sad_stereo.h"
 #include "dps/util/atomic_file.h"
+#include "dps/util/image.h"
 
 namespace {
 
@@ -74,13 +75,8 @@ int main(int argc, char** argv) {
     const cv::Mat disparity = matcher.Compute(left, right);
     dps::WriteDisparity(out, disparity);
     if (args.Has("color")) {
-      const std::string colour = args.Get("color");
-      const std::string tmp = dps::TemporaryPathFor(colour);
-      if (!cv::imwrite(tmp, dps::ColourDisparity(disparity, o.min_disparity,
-                                                 o.min_disparity + o.num_disparities - 1))) {
-        throw dps::Error(colour + ": cannot write image");
-      }
-      dps::RenameReplacing(tmp, colour);
+      dps::WriteImageAtomically(args.Get("color"), dps::ColourDisparity(disparity, o.min_disparity,
+                                                                         o.min_disparity + o.num_disparities - 1));
     }
     int valid = 0;
     for (int y = 0; y < disparity.rows; ++y) {

@@ -69,12 +69,8 @@ int main(int argc, char** argv) {
     dps::Scene scene = dps::ReadScene(args.positional()[0]);
     if (args.Has("rig")) scene.rig = dps::ReadRig(args.Get("rig"));
     if (args.Has("size")) {
-      int w = 0, h = 0;
-      char x = 0;
-      if (std::sscanf(args.Get("size").c_str(), "%d%c%d", &w, &x, &h) != 3 || x != 'x' || w < 16 || h < 16) {
-        throw dps::Error("option --size: expected WxH, e.g. 640x480, got '" + args.Get("size") + "'");
-      }
-      dps::ResizeScene(&scene, w, h);
+      const cv::Size size = args.Size("size", cv::Size(), 16);
+      dps::ResizeScene(&scene, size.width, size.height);
     }
     if (args.Has("seed")) {
       const int seed = args.Integer("seed", 1);

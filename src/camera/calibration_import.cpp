@@ -3,7 +3,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,14 +15,6 @@ namespace {
 
 using internal::FieldReader;
 using internal::OpenForReading;
-
-CameraModel Checked(const std::string& where, const std::function<CameraModel()>& make) {
-  try {
-    return make();
-  } catch (const std::invalid_argument& e) {
-    throw Error(Str(where, ": ", e.what()));
-  }
-}
 
 // The numbers of one line; throws naming the file, line and field when a token is not a number.
 std::vector<double> Numbers(const std::string& line, const std::string& where) {
@@ -88,7 +79,7 @@ CameraModel OCamFromText(const std::string& path) {
   if (h != std::floor(h) || w != std::floor(w) || h < 1 || w < 1 || h > 65536 || w > 65536) {
     throw Error(Str(path, ": field 'image size (height width)': ", h, " x ", w, " is not a positive integer size"));
   }
-  return Checked(path, [&] { return CameraModel::OCam(static_cast<int>(w), static_cast<int>(h), p); });
+  return MakeModel(path, [&] { return CameraModel::OCam(static_cast<int>(w), static_cast<int>(h), p); });
 }
 
 // A plain YAML file of `key: [n, n, ...]` lists (a list may span lines) and `key: n` numbers, as
@@ -154,7 +145,7 @@ CameraModel OCamFromYaml(const std::string& path) {
   for (double v : shape) {
     if (v != std::floor(v) || v < 1 || v > 65536) throw Error(path + ": field 'shape': expected [height, width] in pixels");
   }
-  return Checked(path, [&] { return CameraModel::OCam(static_cast<int>(shape[1]), static_cast<int>(shape[0]), p); });
+  return MakeModel(path, [&] { return CameraModel::OCam(static_cast<int>(shape[1]), static_cast<int>(shape[0]), p); });
 }
 
 // The single top-level map of a PJLab JSON file, and its key.
@@ -165,6 +156,12 @@ cv::FileNode OnlyEntry(const cv::FileStorage& fs, const std::string& path, std::
   *key = entry.name();
   return entry;
 }
+
+// The two kinds of PJLab file, from their single top-level entry named `key`.
+constexpr const char* kBevPrefix = "bev-to-";
+CameraModel PJLabIntrinsic(const cv::FileNode& entry, const std::string& key, const std::string& path,
+                           std::string* camera_name);
+Pose PJLabExtrinsic(const cv::FileNode& entry, const std::string& key, const std::string& path, std::string* camera_name);
 
 // A matrix written as a list of rows, rows x cols.
 Eigen::MatrixXd Rows(const FieldReader& f, const cv::FileNode& node, const std::string& key, int rows, int cols) {
@@ -237,7 +234,7 @@ CameraModel ReadKitti360Fisheye(const std::string& path, std::string* camera_nam
   K(0, 2) = proj.Number("u0");
   K(1, 2) = proj.Number("v0");
   const int w = f.Integer("image_width"), h = f.Integer("image_height");
-  return Checked(path, [&] { return CameraModel::Unified(w, h, K, xi, 0.0, d); });
+  return MakeModel(path, [&] { return CameraModel::Unified(w, h, K, xi, 0.0, d); });
 }
 
 std::map<std::string, Pose> ReadKitti360CamToPose(const std::string& path) {
@@ -271,6 +268,20 @@ CameraModel ReadPJLabOCamIntrinsic(const std::string& path, std::string* camera_
   cv::FileStorage fs = OpenForReading(path);
   std::string key;
   const cv::FileNode entry = OnlyEntry(fs, path, &key);
+  return PJLabIntrinsic(entry, key, path, camera_name);
+}
+
+Pose ReadPJLabExtrinsic(const std::string& path, std::string* camera_name) {
+  cv::FileStorage fs = OpenForReading(path);
+  std::string key;
+  const cv::FileNode entry = OnlyEntry(fs, path, &key);
+  return PJLabExtrinsic(entry, key, path, camera_name);
+}
+
+namespace {
+
+CameraModel PJLabIntrinsic(const cv::FileNode& entry, const std::string& key, const std::string& path,
+                           std::string* camera_name) {
   const FieldReader top(entry, path + ": " + key);
   if (camera_name) *camera_name = top.TextOr("sensor_name", "");
   const FieldReader f = top.Child(top.Required("param"), "param");
@@ -296,14 +307,12 @@ CameraModel ReadPJLabOCamIntrinsic(const std::string& path, std::string* camera_
   for (int i = 0; i < poly.cols(); ++i) p.invpol.push_back(c * poly(0, i));
   p.ss = FitOCamForward(p, w, h);
   if (p.ss.empty()) dist.Fail("data", "no forward polynomial fits this inverse polynomial");
-  return Checked(path, [&] { return CameraModel::OCam(w, h, p); });
+  return MakeModel(path, [&] { return CameraModel::OCam(w, h, p); });
 }
 
-Pose ReadPJLabExtrinsic(const std::string& path, std::string* camera_name) {
-  cv::FileStorage fs = OpenForReading(path);
-  std::string key;
-  const cv::FileNode entry = OnlyEntry(fs, path, &key);
-  const std::string prefix = "bev-to-", suffix = "-extrinsic";
+Pose PJLabExtrinsic(const cv::FileNode& entry, const std::string& key, const std::string& path,
+                    std::string* camera_name) {
+  const std::string prefix = kBevPrefix, suffix = "-extrinsic";
   if (key.rfind(prefix, 0) != 0 || key.size() <= prefix.size() + suffix.size() ||
       key.compare(key.size() - suffix.size(), suffix.size(), suffix) != 0) {
     throw Error(path + ": top-level key '" + key + "': expected 'bev-to-<camera>-extrinsic'");
@@ -322,14 +331,16 @@ Pose ReadPJLabExtrinsic(const std::string& path, std::string* camera_name) {
   return camera_from_bev;
 }
 
+}  // namespace
+
 CameraModel ReadOmnidirCalibration(const std::string& path, cv::Size size) {
-  bool opencv_readable = true;
+  cv::FileStorage fs;
   try {
-    internal::OpenForReading(path);
+    fs = OpenForReading(path);
   } catch (const Error&) {
-    opencv_readable = false;
+    // not a file OpenCV parses: read below as plain YAML
   }
-  if (opencv_readable) return ReadOpenCVOmnidir(path, size);
+  if (fs.isOpened()) return ParseOpenCVOmnidir(fs.root(), path, size);
   const std::map<std::string, std::vector<double>> lists = FlatYamlLists(path);
   const std::vector<double> k = FlatList(lists, path, {"K", "camera_matrix"}, 9);
   const std::vector<double> xi = FlatList(lists, path, {"xi", "Xi"}, 1);
@@ -343,7 +354,7 @@ CameraModel ReadOmnidirCalibration(const std::string& path, cv::Size size) {
   }
   Eigen::Matrix3d K;
   K << k[0], k[1], k[2], k[3], k[4], k[5], k[6], k[7], k[8];
-  return Checked(path, [&] { return CameraModel::Unified(size.width, size.height, K, xi[0], 0.0, dist); });
+  return MakeModel(path, [&] { return CameraModel::Unified(size.width, size.height, K, xi[0], 0.0, dist); });
 }
 
 Pose NominalMount(const Vehicle& vehicle, bool left, NominalAxis axis, double height_m) {
@@ -372,9 +383,6 @@ void ImportOptions::Check() const {
   if (!(vehicle.length_m > 0.0) || !(vehicle.width_m > 0.0)) throw Error("import: vehicle length and width must be > 0");
 }
 
-}  // namespace dps
-
-namespace dps {
 namespace {
 
 struct Source {
@@ -383,12 +391,6 @@ struct Source {
   std::optional<Pose> vehicle_from_camera;
   std::string pose_note;
 };
-
-bool IsPJLabExtrinsic(const std::string& path) {
-  cv::FileStorage fs = internal::OpenForReading(path);
-  const cv::FileNode root = fs.root();
-  return root.isMap() && root.size() == 1 && (*root.begin()).name().rfind("bev-to-", 0) == 0;
-}
 
 std::vector<Source> ReadKitti360(const ImportOptions& o) {
   std::vector<Source> sources;
@@ -420,15 +422,17 @@ std::vector<Source> ReadPJLab(const ImportOptions& o) {
   std::vector<Source> sources;
   std::map<std::string, std::pair<Pose, std::string>> extrinsics;
   for (const std::string& file : o.files) {
-    std::string name;
-    if (IsPJLabExtrinsic(file)) {
-      const Pose camera_from_bev = ReadPJLabExtrinsic(file, &name);
+    // One parse per file: its single entry says whether it holds intrinsics or extrinsics.
+    cv::FileStorage fs = OpenForReading(file);
+    std::string key, name;
+    const cv::FileNode entry = OnlyEntry(fs, file, &key);
+    if (key.rfind(kBevPrefix, 0) == 0) {
+      const Pose camera_from_bev = PJLabExtrinsic(entry, key, file, &name);
       extrinsics[name] = {camera_from_bev, file};
       continue;
     }
-    Source s{"", ReadPJLabOCamIntrinsic(file, &name), std::nullopt, ""};
-    s.name = name;
-    sources.push_back(std::move(s));
+    CameraModel model = PJLabIntrinsic(entry, key, file, &name);
+    sources.push_back(Source{name, std::move(model), std::nullopt, ""});
   }
   for (size_t i = 0; i < sources.size(); ++i) {
     const auto it = extrinsics.find(sources[i].name);

@@ -26,16 +26,6 @@ void WriteList(cv::FileStorage& fs, const std::string& key, const std::vector<do
   fs << "]";
 }
 
-// Calls a CameraModel factory and turns its std::invalid_argument into a dps::Error with context.
-template <typename Factory>
-CameraModel MakeModel(const std::string& where, Factory&& factory) {
-  try {
-    return factory();
-  } catch (const std::invalid_argument& e) {
-    throw Error(Str(where, ": ", e.what()));
-  }
-}
-
 CameraModel ReadIntrinsics(const FieldReader& f) {
   const std::string model_name = f.Text("model");
   CameraModelType type;
@@ -231,7 +221,11 @@ CameraModel ReadOpenCVFisheye(const std::string& path, cv::Size size) {
 
 CameraModel ReadOpenCVOmnidir(const std::string& path, cv::Size size) {
   cv::FileStorage fs = OpenForReading(path);
-  const FieldReader f(fs.root(), path);
+  return ParseOpenCVOmnidir(fs.root(), path, size);
+}
+
+CameraModel ParseOpenCVOmnidir(const cv::FileNode& root, const std::string& path, cv::Size size) {
+  const FieldReader f(root, path);
   const Eigen::Matrix3d K = f.Matrix(FirstPresent(f, {"K", "camera_matrix"}), 3, 3);
   const std::string xi_key = FirstPresent(f, {"xi", "Xi"});
   const cv::FileNode xi_node = f.Required(xi_key);

@@ -17,35 +17,43 @@ constexpr double kDeg = 180.0 / kPi;
 
 const cv::Scalar kCameraColours[] = {{60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}, {150, 150, 150}};
 
-// True when the camera sees the vehicle-frame point p: it projects, inside the image and the mask.
-bool Sees(const RigCamera& camera, const cv::Mat& valid, const Eigen::Vector3d& p, Eigen::Vector2d* pixel) {
-  Eigen::Vector2d px;
-  if (!camera.model.Project(camera.vehicle_from_camera.Inverse().Apply(p), &px) || !camera.model.InImage(px)) return false;
-  const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
-  if (u < 0 || v < 0 || u >= valid.cols || v >= valid.rows || valid.at<std::uint8_t>(v, u) == 0) return false;
-  if (pixel) *pixel = px;
-  return true;
-}
+// What deciding whether a camera sees a point needs, computed once per camera.
+struct Sight {
+  explicit Sight(const RigCamera& c)
+      : camera(c), camera_from_vehicle(c.vehicle_from_camera.Inverse()), valid(CameraValidMask(c)) {}
 
-// Draws the polyline of vehicle-frame points as the camera sees them, broken where a point is
-// not seen or where two neighbours land far apart (a wrap around the image).
-void DrawCurve(cv::Mat& image, const RigCamera& camera, const cv::Mat& valid, const std::vector<Eigen::Vector3d>& points,
-               const cv::Scalar& colour, int thickness, bool directions = false) {
+  // True when the camera-frame point projects inside the image onto a valid pixel.
+  bool SeesCameraPoint(const Eigen::Vector3d& p, Eigen::Vector2d* pixel) const {
+    Eigen::Vector2d px;
+    if (!camera.model.Project(p, &px) || !camera.model.InImage(px)) return false;
+    const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
+    if (u < 0 || v < 0 || u >= valid.cols || v >= valid.rows || valid.at<std::uint8_t>(v, u) == 0) return false;
+    if (pixel) *pixel = px;
+    return true;
+  }
+  // A point of the vehicle frame, or a direction (a point at infinity: only the rotation matters).
+  bool Sees(const Eigen::Vector3d& p, Eigen::Vector2d* pixel = nullptr) const {
+    return SeesCameraPoint(camera_from_vehicle.Apply(p), pixel);
+  }
+  bool SeesDirection(const Eigen::Vector3d& d, Eigen::Vector2d* pixel) const {
+    return SeesCameraPoint(camera_from_vehicle.Rotate(d), pixel);
+  }
+
+  const RigCamera& camera;
+  Pose camera_from_vehicle;
+  cv::Mat valid;
+};
+
+// Draws the polyline of vehicle-frame points (or directions) as the camera sees them, broken where
+// a point is not seen or where two neighbours land far apart (a wrap around the image).
+void DrawCurve(cv::Mat& image, const Sight& sight, const std::vector<Eigen::Vector3d>& points, const cv::Scalar& colour,
+               int thickness, bool directions = false) {
   const double jump = 0.1 * std::max(image.cols, image.rows);
   bool have_last = false;
   Eigen::Vector2d last;
   for (const Eigen::Vector3d& p : points) {
     Eigen::Vector2d px;
-    bool seen;
-    if (directions) {  // a point at infinity: only the rotation matters
-      seen = camera.model.Project(camera.vehicle_from_camera.R.transpose() * p, &px) && camera.model.InImage(px);
-      if (seen) {
-        const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
-        seen = u >= 0 && v >= 0 && u < valid.cols && v < valid.rows && valid.at<std::uint8_t>(v, u) != 0;
-      }
-    } else {
-      seen = Sees(camera, valid, p, &px);
-    }
+    const bool seen = directions ? sight.SeesDirection(p, &px) : sight.Sees(p, &px);
     if (seen && have_last && (px - last).norm() < jump) {
       cv::line(image, cv::Point2d(last.x(), last.y()), cv::Point2d(px.x(), px.y()), colour, thickness, cv::LINE_AA);
     }
@@ -69,7 +77,7 @@ std::string RigSummary(const Rig& rig, double range_m) {
   out.precision(2);
   out << "vehicle: " << rig.vehicle.length_m << " m x " << rig.vehicle.width_m << " m\n";
   for (const RigCamera& c : rig.cameras) {
-    const cv::Mat valid = CameraValidMask(c);
+    const Sight sight(c);
     const Eigen::Vector3d t = c.vehicle_from_camera.t, axis = c.vehicle_from_camera.R.col(2);
     const double azimuth = std::atan2(axis.x(), axis.z()) * kDeg;
     const double elevation = -std::asin(std::max(-1.0, std::min(1.0, axis.y()))) * kDeg;
@@ -80,7 +88,7 @@ std::string RigSummary(const Rig& rig, double range_m) {
         if (std::hypot(x, z) > range_m) continue;
         if (std::abs(x) < rig.vehicle.width_m / 2 && std::abs(z) < rig.vehicle.length_m / 2) continue;
         ++road;
-        seen += Sees(c, valid, Eigen::Vector3d(x, 0, z), nullptr);
+        seen += sight.Sees(Eigen::Vector3d(x, 0, z));
       }
     }
     out.precision(1);
@@ -103,12 +111,12 @@ cv::Mat DrawRigFootprints(const Rig& rig, double range_m, double px_per_m) {
   std::vector<std::vector<std::vector<cv::Point>>> outlines;
   for (size_t i = 0; i < rig.cameras.size(); ++i) {
     const RigCamera& c = rig.cameras[i];
-    const cv::Mat valid = CameraValidMask(c);
+    const Sight sight(c);
     const cv::Scalar colour = kCameraColours[i % 6];
     cv::Mat seen(size, size, CV_8U, cv::Scalar(0));
     cv::parallel_for_(cv::Range(0, size), [&](const cv::Range& rows) {
       for (int v = rows.start; v < rows.end; ++v) {
-        for (int u = 0; u < size; ++u) seen.at<std::uint8_t>(v, u) = Sees(c, valid, to_ground(u, v), nullptr) ? 255 : 0;
+        for (int u = 0; u < size; ++u) seen.at<std::uint8_t>(v, u) = sight.Sees(to_ground(u, v)) ? 255 : 0;
       }
     });
     cv::Mat layer(size, size, CV_8UC3, colour);
@@ -154,22 +162,23 @@ cv::Mat DrawRigCheck(const RigCamera& camera, const Vehicle& vehicle, const cv::
   }
   cv::Mat out;
   if (image.channels() == 1) cv::cvtColor(image, out, cv::COLOR_GRAY2BGR); else out = image.clone();
-  const cv::Mat valid = CameraValidMask(camera);
+  const Sight sight(camera);
+  const cv::Mat& valid = sight.valid;
   const int thick = std::max(1, out.cols / 600);
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(valid.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_SIMPLE);
   cv::drawContours(out, contours, -1, cv::Scalar(60, 220, 60), thick, cv::LINE_AA);
   const double step = grid_m / 20.0;
   for (double g = -range_m; g <= range_m + 1e-9; g += grid_m) {
-    DrawCurve(out, camera, valid, Segment({g, 0, -range_m}, {g, 0, range_m}, step), cv::Scalar(220, 200, 40), thick);
-    DrawCurve(out, camera, valid, Segment({-range_m, 0, g}, {range_m, 0, g}, step), cv::Scalar(220, 200, 40), thick);
+    DrawCurve(out, sight, Segment({g, 0, -range_m}, {g, 0, range_m}, step), cv::Scalar(220, 200, 40), thick);
+    DrawCurve(out, sight, Segment({-range_m, 0, g}, {range_m, 0, g}, step), cv::Scalar(220, 200, 40), thick);
   }
   const double hl = vehicle.length_m / 2, hw = vehicle.width_m / 2;
   const Eigen::Vector3d corners[] = {{-hw, 0, -hl}, {hw, 0, -hl}, {hw, 0, hl}, {-hw, 0, hl}, {-hw, 0, -hl}};
-  for (int i = 0; i < 4; ++i) DrawCurve(out, camera, valid, Segment(corners[i], corners[i + 1], 0.02), cv::Scalar(40, 40, 230), 2 * thick);
+  for (int i = 0; i < 4; ++i) DrawCurve(out, sight, Segment(corners[i], corners[i + 1], 0.02), cv::Scalar(40, 40, 230), 2 * thick);
   std::vector<Eigen::Vector3d> horizon;
   for (int a = 0; a <= 1440; ++a) horizon.emplace_back(std::sin(a * kPi / 720), 0.0, std::cos(a * kPi / 720));
-  DrawCurve(out, camera, valid, horizon, cv::Scalar(40, 230, 230), 2 * thick, true);
+  DrawCurve(out, sight, horizon, cv::Scalar(40, 230, 230), 2 * thick, true);
   return out;
 }
 

@@ -12,6 +12,7 @@
 #include "dps/stereo/sad_stereo.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
+#include "dps/util/image.h"
 
 namespace dps {
 namespace {
@@ -45,9 +46,7 @@ void WriteDisparity(const std::string& path, const cv::Mat& disparity) {
         o[x] = static_cast<std::uint16_t>(std::max(1L, v));  // 0 means invalid
       }
     }
-    const std::string tmp = TemporaryPathFor(path);
-    if (!cv::imwrite(tmp, out)) throw Error(Str(path, ": cannot write image"));
-    RenameReplacing(tmp, path);
+    WriteImageAtomically(path, out);
   } else if (ext == ".pfm") {
     AtomicOutputFile f(path);
     f.stream() << "Pf\n" << disparity.cols << " " << disparity.rows << "\n-1\n";

@@ -15,6 +15,7 @@
 #include "dps/synth/truth_io.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
+#include "dps/util/image.h"
 
 namespace dps {
 namespace {
@@ -49,12 +50,6 @@ std::string FrameName(int frame) {
   char buf[32];
   std::snprintf(buf, sizeof(buf), "%06d.png", frame);
   return buf;
-}
-
-void WriteImageAtomically(const std::string& path, const cv::Mat& image) {
-  const std::string tmp = TemporaryPathFor(path);
-  if (!cv::imwrite(tmp, image)) throw Error(Str(path, ": cannot write image"));
-  RenameReplacing(tmp, path);
 }
 
 // The range buffer as 16-bit millimetres (0 = nothing, saturating at 65535).

@@ -38,11 +38,13 @@
 #pragma once
 
 #include <array>
+#include <stdexcept>
 #include <string>
 
 #include <Eigen/Core>
 
 #include "dps/camera/ocam_model.h"
+#include "dps/util/error.h"
 
 namespace dps {
 
@@ -128,6 +130,17 @@ class CameraModel {
   Eigen::Vector2d Distort(const Eigen::Vector2d& m) const;
   bool Undistort(const Eigen::Vector2d& md, Eigen::Vector2d* m) const;
 };
+
+// Calls a CameraModel factory, turning its std::invalid_argument into a dps::Error prefixed by
+// `where` (the file and camera): how the readers of calibration files report a bad parameter.
+template <typename Factory>
+CameraModel MakeModel(const std::string& where, Factory&& factory) {
+  try {
+    return factory();
+  } catch (const std::invalid_argument& e) {
+    throw Error(Str(where, ": ", e.what()));
+  }
+}
 
 // The unified model that gives the same pixels as a hyperbolic one: xi = b / a,
 // K' = K diag(1/a, 1/a, 1). Throws std::invalid_argument for a model of another type.

@@ -46,5 +46,7 @@ CameraModel ReadOpenCVFisheye(const std::string& path, cv::Size size = cv::Size(
 // `distortion_coefficients` = [k1 k2 p1 p2], optional; the size also from `imageSize`) as a
 // unified model with that distortion.
 CameraModel ReadOpenCVOmnidir(const std::string& path, cv::Size size = cv::Size());
+// The same from a node already parsed (`where` prefixes every error message).
+CameraModel ParseOpenCVOmnidir(const cv::FileNode& root, const std::string& where, cv::Size size = cv::Size());
 
 }  // namespace dps
