@@ -24,16 +24,15 @@ inline std::string OneLine(const cv::Exception& e) {
   return msg;
 }
 
-// Throws dps::Error naming the file when OpenCV's parser does not finish on it within `seconds`
-// (tried in a child process that is then killed): some malformed files make it loop forever.
-void RequireParserFinishes(const std::string& path, double seconds = 10.0);
+// Opens `path` for reading; throws dps::Error naming the file when OpenCV's parser does not finish
+// on it within `seconds` (some malformed files make it loop forever) or fails on it.
+cv::FileStorage OpenWithin(const std::string& path, double seconds);
 
 inline cv::FileStorage OpenForReading(const std::string& path) {
   if (!std::filesystem::exists(path)) throw Error(Str(path, ": file not found"));
-  RequireParserFinishes(path);
   cv::FileStorage fs;
   try {
-    fs.open(path, cv::FileStorage::READ);
+    fs = OpenWithin(path, 10.0);
   } catch (const cv::Exception& e) {
     throw Error(Str(path, ": not a valid OpenCV YAML/XML file: ", OneLine(e)));
   }

@@ -1,45 +1,50 @@
 // OpenCV's YAML parser (4.6) loops forever on some malformed files; a batch must not stall on one.
-// The file is parsed first in a child process that is given a time limit.
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <algorithm>
-#include <cerrno>
+// The file is parsed on a thread of its own that is given a time limit. (A child process would
+// isolate the loop better, but fork() in a process whose other threads hold locks - the batch's
+// workers, OpenCV's pool, the sanitizers' allocator - can leave the child deadlocked on a good
+// file.)
 #include <chrono>
+#include <condition_variable>
+#include <exception>
+#include <memory>
+#include <mutex>
 #include <thread>
-
-#include <opencv2/core.hpp>
 
 #include "dps/util/error.h"
 #include "util/yaml_fields.h"
 
 namespace dps::internal {
 
-void RequireParserFinishes(const std::string& path, double seconds) {
-  const pid_t child = ::fork();
-  if (child < 0) return;  // no process to spare: parse in this one, unguarded
-  if (child == 0) {
-    int status = 1;
+cv::FileStorage OpenWithin(const std::string& path, double seconds) {
+  struct Outcome {
+    std::mutex mutex;
+    std::condition_variable finished;
+    bool done = false;
+    cv::FileStorage fs;
+    std::exception_ptr error;
+  };
+  auto outcome = std::make_shared<Outcome>();
+  std::thread([outcome, path] {
+    cv::FileStorage fs;
+    std::exception_ptr error;
     try {
-      cv::FileStorage fs(path, cv::FileStorage::READ);
-      status = fs.isOpened() ? 0 : 1;
+      fs.open(path, cv::FileStorage::READ);
     } catch (...) {
-      status = 2;
+      error = std::current_exception();
     }
-    ::_exit(status);
+    std::lock_guard<std::mutex> lock(outcome->mutex);
+    outcome->fs = std::move(fs);
+    outcome->error = error;
+    outcome->done = true;
+    outcome->finished.notify_all();
+  }).detach();
+  std::unique_lock<std::mutex> lock(outcome->mutex);
+  if (!outcome->finished.wait_for(lock, std::chrono::duration<double>(seconds), [&] { return outcome->done; })) {
+    // The parser thread cannot be stopped; it is left looping (one core) until the process ends.
+    throw Error(Str(path, ": the YAML parser did not finish within ", seconds, " s; the file is malformed"));
   }
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  int status = 0;
-  for (auto wait = std::chrono::microseconds(200);; wait = std::min(wait * 2, std::chrono::microseconds(20000))) {
-    const pid_t done = ::waitpid(child, &status, WNOHANG);
-    if (done == child || (done < 0 && errno != EINTR)) return;  // finished (the real parse reports errors)
-    if (std::chrono::steady_clock::now() > deadline) break;
-    std::this_thread::sleep_for(wait);
-  }
-  ::kill(child, SIGKILL);
-  ::waitpid(child, &status, 0);
-  throw Error(Str(path, ": the YAML parser did not finish within ", seconds, " s; the file is malformed"));
+  if (outcome->error) std::rethrow_exception(outcome->error);
+  return std::move(outcome->fs);
 }
 
 }  // namespace dps::internal
