@@ -15,6 +15,7 @@
 #include "dps/detect/disparity_histogram.h"
 #include "dps/detect/front_detection.h"
 #include "dps/eval/evaluation.h"
+#include "dps/eval/visibility.h"
 #include "dps/pipeline/surround_pipeline.h"
 #include "dps/pipeline/drive_processing.h"
 #include "dps/stereo/sad_stereo.h"
@@ -260,6 +261,66 @@ void TestFusion() {
   CHECK_EQ(dps::MergeVehicleParts({near_part, far_part, behind}, 5.0, 2.2, false).size(), size_t{2});
 }
 
+// A rig with one pinhole camera (unified, xi = 0; 640x480, f = 300 px) 1.2 m above the road at
+// the front of a 4.5 m x 1.8 m car, looking straight ahead.
+dps::Rig ForwardCameraRig() {
+  dps::Rig rig;
+  rig.vehicle.length_m = 4.5;
+  rig.vehicle.width_m = 1.8;
+  Eigen::Matrix3d K;
+  K << 300, 0, 319.5, 0, 300, 239.5, 0, 0, 1;
+  dps::Pose pose;
+  pose.t = Eigen::Vector3d(0, -1.2, 2.5);
+  rig.cameras.push_back({"front", dps::CameraModel::Unified(640, 480, K, 0.0), pose, cv::Mat(), ""});
+  return rig;
+}
+
+// Which objects the cameras see (DESIGN.md §5): faces turned to the camera, the field, the mask,
+// the own car and other objects hiding them.
+void TestVisibility() {
+  dps::Rig rig = ForwardCameraRig();
+  const dps::TruthRow car{0, 0.0, 1, "car", 0.0, 10.0, 0.0, 4.5, 1.8, 1.5, 0, 0};
+  const dps::Visibility vis(rig);
+  // The camera (x = 0, 1.2 m high, below the car's 1.5 m roof) sees only the car's back face: its
+  // share of the box's surface is w h / 2 (w h + l h + l w).
+  const double back = 1.8 * 1.5 / (2 * (1.8 * 1.5 + 4.5 * 1.5 + 4.5 * 1.8));
+  CHECK_NEAR(vis.SeenFraction(car, {&car}, 0), back, 1e-9);
+  CHECK(vis.Sees(car, {&car}));
+  // Moved 1 m to the right, its left side shows too: more than the back alone.
+  dps::TruthRow right = car;
+  right.x_m = 1.5;
+  CHECK(vis.SeenFraction(right, {&right}, 0) > back + 0.01);
+  // Behind the car: outside the field.
+  dps::TruthRow behind = car;
+  behind.z_m = -10.0;
+  CHECK_NEAR(vis.SeenFraction(behind, {&behind}, 0), 0.0, 0);
+  CHECK(!vis.Sees(behind, {&behind}));
+  // Hidden behind a truck (3.5 m high, 2.5 m wide, 8 m long, z 8..16) a car at 20 m is not seen;
+  // without the truck it is.
+  dps::TruthRow hidden = car;
+  hidden.id = 2;
+  hidden.z_m = 20.0;
+  const dps::TruthRow truck{0, 0.0, 3, "truck", 0.0, 12.0, 0.0, 8.0, 2.5, 3.5, 0, 0};
+  CHECK_NEAR(vis.SeenFraction(hidden, {&hidden, &truck}, 0), 0.0, 0);
+  CHECK_NEAR(vis.SeenFraction(hidden, {&hidden}, 0), back, 1e-9);
+  // A low object (0.5 m) right beside the car is hidden by the own car (1.5 m high) from a camera
+  // in the left mirror looking right across it, and seen with an own car 0.3 m high.
+  dps::Rig mirror = rig;
+  mirror.cameras[0].vehicle_from_camera.t = Eigen::Vector3d(-1.0, -1.2, 0.5);
+  mirror.cameras[0].vehicle_from_camera.R = dps::AxisAngle(Eigen::Vector3d::UnitY(), M_PI / 2);  // z -> +X
+  const dps::TruthRow low{0, 0.0, 4, "box", 3.0, 0.5, 0.0, 1.0, 1.0, 0.5, 0, 0};
+  CHECK_NEAR(dps::Visibility(mirror).SeenFraction(low, {&low}, 0), 0.0, 0);
+  dps::VisibilityOptions flat;
+  flat.own_car_height_m = 0.3;
+  CHECK(dps::Visibility(mirror, flat).SeenFraction(low, {&low}, 0) > 0.05);
+  // A mask that sees nothing.
+  rig.cameras[0].mask = cv::Mat::zeros(480, 640, CV_8U);
+  CHECK(!dps::Visibility(rig).Sees(car, {&car}));
+  dps::VisibilityOptions bad;
+  bad.min_seen_fraction = 0.0;
+  CHECK_THROWS_WITH(dps::Visibility(ForwardCameraRig(), bad), dps::Error, "min_seen_fraction");
+}
+
 void TestEvaluation() {
   dps::TruthRow car{0, 0.0, 1, "car", 0.0, 10.0, 0.0, 4.5, 1.8, 1.5, 0, 0};
   dps::TruthRow far{0, 0.0, 2, "car", 0.0, 30.0, 0.0, 4.5, 1.8, 1.5, 0, 0};   // beyond 20 m
@@ -292,20 +353,38 @@ void TestEvaluation() {
   std::sort(errors.begin(), errors.end());
   CHECK_NEAR(errors[0], std::abs(std::hypot(0.3, 7.6) - 7.75), 1e-9);
   CHECK_NEAR(errors[1], std::abs(std::hypot(-3.2, 0.6) - 3.1), 1e-9);
-  // A front-only field of view (+-50 degrees from (0, 0.9)) leaves out the side car, the left
-  // detections and (6, 5), 55.6 degrees off the axis.
+  // Zones by the near point: the car ahead (front), the side car (side), a car 10 m behind (rear);
+  // the false detection (6, 5) by its own point (front of the 4.8 m default length).
+  const dps::TruthRow behind{0, 0.0, 6, "car", 0.0, -12.25, 0.0, 4.5, 1.8, 1.5, 0, 0};
+  r = dps::Evaluate(dets, {car, far, side, behind}, o);
+  CHECK_EQ(r.zones.size(), size_t{3});
+  CHECK(r.zones[0].name == "front" && r.zones[1].name == "side" && r.zones[2].name == "rear");
+  CHECK_EQ(r.zones[0].objects, 1);
+  CHECK_EQ(r.zones[1].objects, 1);
+  CHECK_EQ(r.zones[2].objects, 1);
+  CHECK_EQ(r.zones[2].matched_objects, 0);
+  CHECK_EQ(r.zones[0].detections, 2);
+  CHECK_EQ(r.zones[0].matched_detections, 1);
+  CHECK_EQ(r.zones[1].detections, 2);
+  CHECK_EQ(r.overall.objects, 3);
+  // With a rig whose one camera looks ahead (below), the car behind is seen by no camera and does
+  // not count; a detection matching it is still a true one.
+  o.visibility = std::make_shared<const dps::Visibility>(ForwardCameraRig());
+  r = dps::Evaluate({det(0.3, 7.6, "front"), det(0.0, -10.0, "left")}, {car, behind}, o);
+  CHECK_EQ(r.overall.objects, 1);
+  CHECK_EQ(r.overall.matched_objects, 1);
+  CHECK_EQ(r.overall.detections, 2);
+  CHECK_EQ(r.overall.matched_detections, 2);
+  CHECK_EQ(r.zones[2].objects, 0);
+  CHECK_EQ(r.zones[2].detections, 1);
+  o.visibility = nullptr;
+  // A further restriction to a front-only field of view (+-50 degrees from (0, 0.9)) leaves out
+  // the side and rear cars, the left detections and (6, 5), 55.6 degrees off the axis.
   o.coverage.sectors.push_back({"front", {0, 0.9}, 0.0, 50.0 * M_PI / 180.0});
-  r = dps::Evaluate(dets, {car, far, side}, o);
+  r = dps::Evaluate(dets, {car, far, side, behind}, o);
   CHECK_EQ(r.overall.objects, 1);
   CHECK_EQ(r.overall.detections, 1);
-  // A car passing on the left (x -3.4..-1.6, z -0.25..4.25) has its near point (-1.6, 0) outside
-  // the front sector, so it does not count; a detection on its side inside the sector is not a
-  // false one, but a second detection on it is (each object matched at most once).
-  const dps::TruthRow passing{0, 0.0, 4, "car", -2.5, 2.0, 0.0, 4.5, 1.8, 1.5, 0, 0};
-  r = dps::Evaluate({det(-1.6, 4.0, "front"), det(-1.7, 3.6, "front")}, {passing}, o);
-  CHECK_EQ(r.overall.objects, 0);
-  CHECK_EQ(r.overall.detections, 2);
-  CHECK_EQ(r.overall.matched_detections, 1);
+  o.coverage = dps::Coverage();
   // A car whose near point is 19.5 m away (z 19.5..24) is counted; a detection inside its
   // footprint at 20.3 m, outside the zone, still matches it (recall 1) but is not counted for
   // precision. A detection in the zone on the same car is taken first, and then the one outside
@@ -637,6 +716,7 @@ int main() {
   TestLinking();
   TestFrontProjection();
   TestFusion();
+  TestVisibility();
   TestEvaluation();
   TestFrontCoverage();
   TestSideCoverage();

@@ -155,7 +155,7 @@ void TestSubset() {
     const dps::DriveSummary s = dps::ProcessDrive(drive, (work / "out").string(), po);
     CHECK_EQ(s.frames, r.scene.FrameCount());
     dps::EvaluationOptions eo;
-    eo.coverage = dps::PipelineCoverage(r.processing_rig, dps::DefaultPipelineOptions(r.processing_rig));
+    eo.visibility = std::make_shared<const dps::Visibility>(r.scene.rig);
     const dps::EvaluationResult e = dps::Evaluate(dps::ReadDetections(s.output_dir + "/detections.csv"),
                                                   dps::ReadTruth(drive + "/truth.csv"), eo);
     std::printf("%s (%s%s%s): %d objects, recall %.3f, precision %.3f, %d of %d frames with a detection\n",

@@ -1,10 +1,13 @@
 // The detection and tracking targets on the shipped scenes, as a user measures them: each scene
 // rendered by the synthesiser at its shipped settings (640x480), processed like dps-process does,
-// detections.csv and tracks.csv scored against truth.csv within 20 m and the pipeline's field of
-// view (dps-eval).
-// Detections (issue targets): recall and precision >= 0.95 and median range error <= 5 % in the
-// 0-10 and 10-20 m bands on the lead car, the overtaking car, the left turn and the parked row on
-// either side; the empty road without a detection in >= 98 % of its frames.
+// detections.csv and tracks.csv scored against truth.csv within 20 m.
+// Detections (issue targets), where the pipeline looks (its sectors, PipelineCoverage): recall and
+// precision >= 0.95 and median range error <= 5 % in the 0-10 and 10-20 m bands on the lead car,
+// the overtaking car, the left turn and the parked row on either side; the empty road without a
+// detection in >= 98 % of its frames. The DESIGN.md §5 figures (every object a camera sees, by
+// zone: the wedges between the sectors and the rear too) are printed, not asserted: they fall
+// short of the whole-surround targets (front and side recall >= 0.95, rear >= 0.9) until the
+// pipeline measures those directions (docs/scenarios.md gives them).
 // Tracks:
 // - lead car and overtaking car: one track id over the whole time (no switch), median velocity
 //   error <= 0.5 m/s;
@@ -54,16 +57,24 @@ Scored Run(const std::string& name) {
   dps::DriveOptions po;
   po.map_video = false;
   dps::ProcessDrive(drive, out, po);
-  const dps::Rig rig = dps::ReadRig(drive + "/rig.yaml");
+  const dps::Rig rig = dps::ReadRig(drive + "/rig.yaml");  // the rendering rig
   dps::EvaluationOptions eo;
   eo.max_range_m = 20.0;
-  eo.coverage = dps::PipelineCoverage(rig, dps::DefaultPipelineOptions(rig));
+  eo.visibility = std::make_shared<const dps::Visibility>(rig);
   Scored s;
   const std::vector<dps::TruthRow> truth = dps::ReadTruth(drive + "/truth.csv");
-  s.detections = dps::Evaluate(dps::ReadDetections(out + "/" + name + "/detections.csv"), truth, eo);
+  const std::vector<dps::Detection> detections = dps::ReadDetections(out + "/" + name + "/detections.csv");
+  const dps::EvaluationResult all = dps::Evaluate(detections, truth, eo);
+  const std::vector<dps::BandScore>& z = all.zones;
+  std::printf("%s: DESIGN.md 5 (every object a camera sees): recall %.3f, by zone front %.3f of %d, side %.3f of %d, "
+              "rear %.3f of %d; precision %.3f\n",
+              name.c_str(), all.overall.Recall(), z[0].Recall(), z[0].objects, z[1].Recall(), z[1].objects,
+              z[2].Recall(), z[2].objects, all.overall.Precision());
+  eo.coverage = dps::PipelineCoverage(rig, dps::DefaultPipelineOptions(rig));
+  s.detections = dps::Evaluate(detections, truth, eo);
   const dps::BandScore& d = s.detections.overall;
-  std::printf("%s: detections recall %.3f, precision %.3f, median range error 0-10 m %.1f %%, 10-20 m %.1f %%, "
-              "%d of %d frames with a detection in the zone\n",
+  std::printf("%s: where the pipeline looks: detections recall %.3f, precision %.3f, median range error 0-10 m "
+              "%.1f %%, 10-20 m %.1f %%, %d of %d frames with a detection in the zone\n",
               name.c_str(), d.Recall(), d.Precision(), 100 * s.detections.bands[0].MedianRelativeRangeError(),
               100 * s.detections.bands[1].MedianRelativeRangeError(), s.detections.frames_with_detections,
               s.detections.frames);

@@ -4,11 +4,11 @@
 
 #include "cli.h"
 #include "dps/camera/rig_io.h"
+#include "dps/camera/valid_mask.h"
 #include "dps/detect/detection_io.h"
 #include "dps/eval/evaluation.h"
 #include "dps/map/tracker.h"
 #include "dps/map/tracks_io.h"
-#include "dps/pipeline/surround_pipeline.h"
 #include "dps/synth/truth_io.h"
 #include "dps/util/atomic_file.h"
 
@@ -17,20 +17,17 @@ namespace {
 const char* kUsage = R"(usage: dps-eval --detections detections.csv [--tracks tracks.csv] --truth truth.csv [options]
 
 Scores detections against ground truth (DESIGN.md §5): per frame, a truth object counts when the
-point of its footprint nearest to the vehicle (its near point) is within --max-range and inside
-the processed field of view; a detection matches an object when its (x, z) lies within
+point of its footprint nearest to the vehicle (its near point) is within --max-range and a camera
+sees it (with --rig: at least 5 % of its box's surface in the camera's valid pixels - model, field,
+mask - not hidden by the own car or another object; without it, every object in range counts),
+whatever the pipeline processes. A detection matches an object when its (x, z) lies within
 max(0.75 m, 0.1 * range) of the footprint; nearest pairs first, each at most once, the counted
-objects first. A detection in the zone that matches an object not counted (near point outside the
-zone, part of it inside) is a true detection: it counts for precision, the object not for recall.
-A counted object left unmatched may be matched by a detection outside the zone (its near point at
-19.5 m, the detection at 20.3 m); such a detection is not counted for precision.
-Prints recall, precision and range errors per range band and per source.
-
-Field of view: with --rig, the sectors the default pipeline processes: the front pair where both
-cameras' views overlap (+-atan(width / 2f) from where the left view's right edge crosses the right
-view's left edge), each side view from its camera over the columns motion stereo matches at the
-views' full size (not the strips at its edges where a match could lie outside the previous view);
-without it, every direction counts.
+objects first. A detection in the zone (within --max-range) that matches an object not counted is
+a true detection: it counts for precision, the object not for recall. A counted object left
+unmatched may be matched by a detection outside the zone (its near point at 19.5 m, the detection
+at 20.3 m); such a detection is not counted for precision.
+Prints recall, precision and range errors per range band, per zone (front: near point ahead of
+the own car's front; rear: behind its back; side: between) and per source.
 
   --detections FILE   detections.csv
   --tracks FILE       tracks.csv: scored the same way on (x, z), plus the median velocity error
@@ -38,7 +35,11 @@ without it, every direction counts.
                       different track than before)
   --truth FILE        truth.csv
   --max-range M       evaluated zone, metres (default 20)
-  --rig FILE          rig.yaml for the field of view
+  --rig FILE          the rig whose cameras see the objects (for a synthetic drive its
+                      rig_true.yaml, the rig it was rendered with; else rig.yaml); masks named in
+                      it apply; its vehicle length sets the zones (else 4.8 m)
+  --masks DIR         masks/<camera>.png of the cameras (e.g. the drive's masks/ or dps-process's
+                      OUT/<drive>/masks/), instead of the rig's
   --json FILE         also write the scores as JSON
   --errors FILE       also write each scoring error as CSV, to see what went wrong where:
                       frame,error,id,kind,x,z,range — "missed" (a counted object no detection
@@ -52,7 +53,7 @@ without it, every direction counts.
 
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-eval", [&] {
-    const dps_cli::Args args(argc, argv, {"detections", "tracks", "truth", "max-range", "rig", "json", "errors"}, {});
+    const dps_cli::Args args(argc, argv, {"detections", "tracks", "truth", "max-range", "rig", "masks", "json", "errors"}, {});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -62,9 +63,15 @@ int main(int argc, char** argv) {
     dps::EvaluationOptions options;
     options.max_range_m = args.Number("max-range", 20.0);
     if (!(options.max_range_m > 0)) throw dps::Error("option --max-range: expected > 0");
+    if (args.Has("masks") && !args.Has("rig")) throw dps::Error("option --masks needs --rig");
     if (args.Has("rig")) {
-      const dps::Rig rig = dps::ReadRig(args.Get("rig"));
-      options.coverage = dps::PipelineCoverage(rig, dps::DefaultPipelineOptions(rig));
+      dps::Rig rig = dps::ReadRig(args.Get("rig"));
+      if (args.Has("masks")) {
+        for (dps::RigCamera& c : rig.cameras) {
+          c.mask = dps::ReadCameraMask(args.Get("masks") + "/" + c.name + ".png", c.model);
+        }
+      }
+      options.visibility = std::make_shared<const dps::Visibility>(rig);
     }
     const std::vector<dps::TruthRow> truth = dps::ReadTruth(args.Get("truth"));
     std::string json, errors;

@@ -68,8 +68,36 @@ EvaluationResult EmptyResult(const EvaluationOptions& options) {
     s.name = Number(s.lo_m, 0) + "-" + Number(s.hi_m, 0);
     result.bands.push_back(s);
   }
+  for (const char* name : {"front", "side", "rear"}) {
+    BandScore z;
+    z.name = name;
+    z.hi_m = options.max_range_m;
+    result.zones.push_back(z);
+  }
   for (const char* name : {"front", "left", "right"}) result.sources.push_back({name, 0, 0});
   return result;
+}
+
+double VehicleLength(const EvaluationOptions& options) {
+  return options.visibility ? options.visibility->rig().vehicle.length_m : options.vehicle_length_m;
+}
+
+// DESIGN.md §5's zones by the point's z: ahead of the own car's front, behind its back, between.
+BandScore* ZoneOf(EvaluationResult* result, double z, double vehicle_length_m) {
+  if (z > vehicle_length_m / 2) return &result->zones[0];
+  if (z < -vehicle_length_m / 2) return &result->zones[2];
+  return &result->zones[1];
+}
+
+// A detection's point is in the zone when it lies within range (and the optional coverage).
+bool InZone(const Eigen::Vector2d& p, const EvaluationOptions& options) {
+  return p.norm() <= options.max_range_m && options.coverage.Contains(p);
+}
+
+// An object counts when its near point is in the zone and a camera sees it.
+bool Counts(const TruthRow& object, const std::vector<const TruthRow*>& scene, const EvaluationOptions& options) {
+  if (!InZone(NearPoint(object), options)) return false;
+  return !options.visibility || options.visibility->Sees(object, scene);
 }
 
 BandScore* BandOf(EvaluationResult* result, double range) {
@@ -122,14 +150,15 @@ void Match(FrameMatch* m) {
   }
 }
 
-// Recall and range errors of the counted objects, overall and by the band of their near point.
-void ScoreObjects(int f, const FrameMatch& m, EvaluationResult* result) {
+// Recall and range errors of the counted objects, overall and by the band and zone of their near
+// point.
+void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, EvaluationResult* result) {
   for (size_t i = 0; i < m.objects.size(); ++i) {
     const TruthRow& object = *m.objects[i];
     const Eigen::Vector2d near = NearPoint(object);
     const double range = near.norm();
     if (!m.matched_by[i]) result->errors.push_back({f, true, object.id, object.kind, near, range});
-    for (BandScore* b : {&result->overall, BandOf(result, range)}) {
+    for (BandScore* b : {&result->overall, BandOf(result, range), ZoneOf(result, near.y(), vehicle_length_m)}) {
       if (!b) continue;
       ++b->objects;
       if (!m.matched_by[i]) continue;
@@ -143,13 +172,15 @@ void ScoreObjects(int f, const FrameMatch& m, EvaluationResult* result) {
   }
 }
 
-// Precision of the detections in the zone, overall, by band (of their object's near point, or
-// their own range when false) and by source.
-void ScoreDetections(int f, const FrameMatch& m, EvaluationResult* result) {
+// Precision of the detections in the zone, overall, by band and zone (of their object's near
+// point, or their own point when false) and by source.
+void ScoreDetections(int f, const FrameMatch& m, double vehicle_length_m, EvaluationResult* result) {
   for (size_t j = 0; j < m.dets.size(); ++j) {
     const Detection& d = *m.dets[j];
-    const double range = m.det_match[j] >= 0 ? NearPoint(*m.objects[m.det_match[j]]).norm() : d.range_m;
-    for (BandScore* b : {&result->overall, BandOf(result, range)}) {
+    const Eigen::Vector2d point =
+        m.det_match[j] >= 0 ? NearPoint(*m.objects[m.det_match[j]]) : Eigen::Vector2d(d.x_m, d.z_m);
+    const double range = m.det_match[j] >= 0 ? point.norm() : d.range_m;
+    for (BandScore* b : {&result->overall, BandOf(result, range), ZoneOf(result, point.y(), vehicle_length_m)}) {
       if (!b) continue;
       ++b->detections;
       b->matched_detections += m.det_seen[j] >= 0;
@@ -175,9 +206,7 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
                           const EvaluationOptions& options) {
   options.Check();
   EvaluationResult result = EmptyResult(options);
-  const auto in_zone = [&](const Eigen::Vector2d& p) {
-    return p.norm() <= options.max_range_m && options.coverage.Contains(p);
-  };
+  const double length = VehicleLength(options);
   std::map<int, std::vector<const TruthRow*>> truth_by_frame;
   for (const TruthRow& t : truth) truth_by_frame[t.frame].push_back(&t);
   std::map<int, std::vector<const Detection*>> det_by_frame;
@@ -189,15 +218,18 @@ EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::v
   frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
   result.frames = static_cast<int>(frames.size());
   for (const int f : frames) {
-    // Objects in the zone count (recall); the others, partly in view, can still be what a
+    // Objects in range that a camera sees count (recall); the others can still be what a
     // detection in the zone sees, and such a detection is not a false one.
     FrameMatch m;
-    for (const TruthRow* t : truth_by_frame[f]) (in_zone(NearPoint(*t)) ? m.objects : m.uncounted).push_back(t);
-    for (const Detection* d : det_by_frame[f]) (in_zone({d->x_m, d->z_m}) ? m.dets : m.outside).push_back(d);
+    const std::vector<const TruthRow*>& scene = truth_by_frame[f];
+    for (const TruthRow* t : scene) (Counts(*t, scene, options) ? m.objects : m.uncounted).push_back(t);
+    for (const Detection* d : det_by_frame[f]) {
+      (InZone({d->x_m, d->z_m}, options) ? m.dets : m.outside).push_back(d);
+    }
     if (!m.dets.empty()) ++result.frames_with_detections;
     Match(&m);
-    ScoreObjects(f, m, &result);
-    ScoreDetections(f, m, &result);
+    ScoreObjects(f, m, length, &result);
+    ScoreDetections(f, m, length, &result);
   }
   return result;
 }
@@ -222,10 +254,12 @@ TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std:
   // tolerance and compare the track id with the object's previous one.
   std::map<int, std::vector<const Detection*>> by_frame;
   for (const Detection& d : as_detections) by_frame[d.frame].push_back(&d);
+  std::map<int, std::vector<const TruthRow*>> truth_by_frame;
+  for (const TruthRow& t : truth) truth_by_frame[t.frame].push_back(&t);
   std::map<int, int> last_track;  // truth id -> track id
   for (const TruthRow& t : truth) {
+    if (!Counts(t, truth_by_frame[t.frame], options)) continue;
     const Eigen::Vector2d near = NearPoint(t);
-    if (near.norm() > options.max_range_m || !options.coverage.Contains(near)) continue;
     const double tolerance = std::max(0.75, 0.1 * near.norm());
     const Detection* best = nullptr;
     double best_d = tolerance;
@@ -258,6 +292,8 @@ std::string EvaluationTable(const EvaluationResult& r) {
   };
   for (const BandScore& b : r.bands) row(b);
   row(r.overall);
+  out << "zone      objects  recall  detections  precision  range error median / p90 (m)\n";
+  for (const BandScore& z : r.zones) row(z);
   out << "source    detections  matched  precision\n";
   for (const SourceScore& s : r.sources) {
     char buf[120];
@@ -286,6 +322,11 @@ std::string EvaluationJson(const EvaluationResult& r) {
   for (size_t i = 0; i < r.bands.size(); ++i) {
     out << (i ? ", " : "");
     band(r.bands[i]);
+  }
+  out << "],\n  \"zones\": [";
+  for (size_t i = 0; i < r.zones.size(); ++i) {
+    out << (i ? ", " : "");
+    band(r.zones[i]);
   }
   out << "],\n  \"sources\": [";
   for (size_t i = 0; i < r.sources.size(); ++i) {
@@ -339,6 +380,7 @@ void CheckSameDrive(const std::vector<std::pair<int, double>>& results, const st
 void EvaluationOptions::Check() const {
   const OptionCheck Require("evaluation");
   Require(max_range_m > 0 && max_range_m <= 1000, "max_range_m", max_range_m, "0 < range <= 1000 m");
+  Require(vehicle_length_m > 0 && vehicle_length_m <= 100, "vehicle_length_m", vehicle_length_m, "0 < length <= 100 m");
 }
 
 }  // namespace dps

@@ -2,33 +2,43 @@
 // tests do.
 //
 // Per frame, a truth object counts when its near point (the footprint point nearest to the
-// vehicle origin) lies within max_range_m and inside the processed field of view (Coverage, coverage.h); a
-// detection is in the zone under the same rule for its (x, z). A detection matches an object when
-// its (x, z) lies within max(0.75 m, 0.1 * range of the object's near point) of the footprint
-// (0 inside); pairs are taken nearest first, each object and each detection at most once: first
-// with the counted objects, then what is left with the objects that do not count (their near point
-// outside the zone, the rest of them partly inside it) — a detection of such an object is a true
-// one, though the object is not counted for recall. Counted objects still unmatched are then
-// matched with the detections outside the zone: §5 matches detections and objects regardless of
-// the zone (a car whose near point is 19.5 m away, detected at 20.3 m, is found); such detections
-// are not counted for precision.
+// vehicle origin) lies within max_range_m and a camera of the rig sees it (Visibility,
+// visibility.h: 5 % of its box's surface in a camera's valid pixels, not hidden by the own car or
+// another object), whatever views the pipeline processes; a detection is in the zone when its
+// (x, z) lies within max_range_m. A detection matches an object when its (x, z) lies within
+// max(0.75 m, 0.1 * range of the object's near point) of the footprint (0 inside); pairs are
+// taken nearest first, each object and each detection at most once: first with the counted
+// objects, then what is left with the objects that do not count (beyond the range, or seen by no
+// camera) — a detection of such an object is a true one, though the object is not counted for
+// recall. Counted objects still unmatched are then matched with the detections outside the zone:
+// §5 matches detections and objects regardless of the zone (a car whose near point is 19.5 m
+// away, detected at 20.3 m, is found); such detections are not counted for precision.
 // recall = matched counted objects / counted objects; precision = matched detections / detections
 // in the zone; range error = |detection range - near-point range| of the counted matches, per band
-// of the near point's range.
+// of the near point's range and per zone (front: near point ahead of the own car's front, z >
+// length / 2; rear: behind its back; side: between; a false detection by its own point).
 
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "dps/detect/coverage.h"
 #include "dps/detect/detection.h"
+#include "dps/eval/visibility.h"
 #include "dps/synth/truth.h"
 
 namespace dps {
 
 struct EvaluationOptions {
   double max_range_m = 20.0;   // > 0
+  // Which objects the cameras see; null: every object within range counts.
+  std::shared_ptr<const Visibility> visibility;
+  double vehicle_length_m = 4.8;  // for the zones (> 0); the visibility's rig's when it is set
+  // Optional, not DESIGN.md §5: objects and detections count only inside these sectors too (empty:
+  // every direction) - for regression tests of what a pipeline does where it looks
+  // (PipelineCoverage).
   Coverage coverage;
 
   // Throws dps::Error naming the field, its value and the violated constraint.
@@ -71,6 +81,7 @@ struct ScoringError {
 struct EvaluationResult {
   BandScore overall;                 // all objects / detections in the zone
   std::vector<BandScore> bands;      // 0-10, 10-20, 20-30, 30-50 m (object near-point range)
+  std::vector<BandScore> zones;      // front, side, rear (object near point; a false detection's point)
   std::vector<SourceScore> sources;  // front, left, right
   int frames = 0;                    // frames with truth rows or detections
   int frames_with_detections = 0;    // frames with at least one detection in the zone
