@@ -234,6 +234,19 @@ void TestProcessDrive() {
   const dps::DriveSummary paired = dps::ProcessDrive(pairs.string(), (kTmp / "out_pairs").string(), o);
   CHECK_EQ(paired.frames, 4);
   CHECK(paired.ToJson().find("processing frames 1..4") != std::string::npos);
+  // frames.csv with a frame lost between frames 2 and 3 (0.133 s apart, the others 0.067 s): an
+  // error naming them; with allow_frame_gaps processed with a warning.
+  const fs::path gap = kTmp / "drives" / "gap";
+  fs::copy(kTmp / "drives" / "lead", gap, fs::copy_options::recursive);
+  std::ofstream(gap / "frames.csv") << "frame,t\n0,0\n1,0.0666667\n2,0.1333333\n3,0.2666667\n4,0.3333333\n5,0.4\n";
+  CHECK_THROWS_WITH(dps::ProcessDrive(gap.string(), (kTmp / "out_gap").string(), o), dps::Error,
+                    "frames.csv: frames 2 and 3 are 0.1333334 s apart, 2.00000");
+  CHECK(!fs::exists(kTmp / "out_gap" / "gap"));
+  o.allow_frame_gaps = true;
+  const dps::DriveSummary across = dps::ProcessDrive(gap.string(), (kTmp / "out_gap").string(), o);
+  CHECK_EQ(across.frames, 5);
+  CHECK(across.ToJson().find("frames 2 and 3 are 0.1333334 s apart") != std::string::npos);
+  o.allow_frame_gaps = false;
   // Numbers without zero padding are ordered by number (2.png before 10.png); a gap, a number
   // twice or a file without a number are errors naming the frame.
   const fs::path plain = kTmp / "plain";

@@ -32,6 +32,9 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --no-video            no map video
   --truncate            left and right differ: process the frame numbers both have
                         (image folders pair by file number; videos by position)
+  --allow-gaps          frames.csv with consecutive frames more than 1.5 median intervals apart
+                        (a frame lost in recording): process across the gap with a warning
+                        instead of failing the drive
   --no-mask-estimate    cameras without a mask: the model's field alone (no estimate from the images)
   --mask-seconds S      estimate masks from the first S seconds (default 2)
   --image-fps F         frame rate of image folders without frames.csv (default 30)
@@ -85,7 +88,7 @@ int main(int argc, char** argv) {
     const dps_cli::Args args(argc, argv,
                              {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
                               "yaw-scale", "time-column", "yaw-file", "mask-seconds"},
-                             {"force", "map-png", "no-video", "truncate", "quiet", "diagnostics", "no-mask-estimate"});
+                             {"force", "map-png", "no-video", "truncate", "allow-gaps", "quiet", "diagnostics", "no-mask-estimate"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -107,6 +110,7 @@ int main(int argc, char** argv) {
     options.map_png = args.Has("map-png");
     options.diagnostics = args.Has("diagnostics");
     options.truncate = args.Has("truncate");
+    options.allow_frame_gaps = args.Has("allow-gaps");
     options.estimate_masks = !args.Has("no-mask-estimate");
     options.mask_estimate_s = args.Number("mask-seconds", 2.0);
     if (!(options.mask_estimate_s > 0)) throw dps::Error("option --mask-seconds: expected > 0");

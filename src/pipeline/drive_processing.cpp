@@ -87,6 +87,24 @@ struct DriveInput {
   CanLog can;
 };
 
+// Consecutive frames (numbered from 0, as processed) more than max_gap median intervals apart.
+std::vector<std::string> FrameGaps(const std::vector<double>& times, double max_gap) {
+  if (times.size() < 3) return {};  // two steps at least
+  std::vector<double> steps;
+  for (size_t i = 1; i < times.size(); ++i) steps.push_back(times[i] - times[i - 1]);
+  std::vector<double> sorted = steps;  // the lower median: a missing frame only lengthens steps
+  std::nth_element(sorted.begin(), sorted.begin() + (sorted.size() - 1) / 2, sorted.end());
+  const double median = sorted[(sorted.size() - 1) / 2];
+  std::vector<std::string> gaps;
+  for (size_t i = 0; i < steps.size(); ++i) {
+    if (steps[i] > max_gap * median) {
+      gaps.push_back(Str("frames ", i, " and ", i + 1, " are ", steps[i], " s apart, ", steps[i] / median,
+                         " times the median interval of ", median, " s: a frame is missing"));
+    }
+  }
+  return gaps;
+}
+
 DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveSummary* s) {
   if (!fs::is_directory(drive_dir)) throw Error(Str(drive_dir, ": not a folder"));
   DriveInput in;
@@ -119,6 +137,10 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
     }
     in.times.erase(in.times.begin(), in.times.begin() + offset);
     in.times.resize(in.frames);
+    for (const std::string& gap : FrameGaps(in.times, o.max_frame_gap)) {
+      if (!o.allow_frame_gaps) throw Error(Str(frames_csv.string(), ": ", gap, " (--allow-gaps processes across it)"));
+      s->warnings.push_back(Str("frames.csv: ", gap));
+    }
   } else {
     const double fps = in.left->fps() > 0 ? in.left->fps() : o.image_fps;
     for (int i = 0; i < in.frames; ++i) in.times.push_back((offset + i) / fps);
@@ -433,6 +455,7 @@ void DriveOptions::Check() const {
   const OptionCheck Require("drive");
   Require(image_fps > 0 && image_fps <= 10000, "image_fps", image_fps, "0 < fps <= 10000");
   Require(mask_estimate_s > 0, "mask_estimate_s", mask_estimate_s, "> 0");
+  Require(max_frame_gap > 1 && max_frame_gap <= 1000, "max_frame_gap", max_frame_gap, "1 < gap <= 1000 intervals");
   Require(can.max_gap_s > 0, "can.max_gap_s", can.max_gap_s, "> 0");
   Require(std::isfinite(can.speed_scale) && can.speed_scale != 0, "can.speed_scale", can.speed_scale, "finite and != 0");
   Require(std::isfinite(can.yaw_rate_scale), "can.yaw_rate_scale", can.yaw_rate_scale, "finite");

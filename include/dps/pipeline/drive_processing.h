@@ -28,6 +28,11 @@ struct DriveOptions {
   TrackerOptions tracker;
   OccupancyOptions occupancy;
   bool truncate = false;          // left and right with different frames: keep the frame numbers both have
+  // frames.csv with two consecutive frames more than max_frame_gap intervals (its median) apart -
+  // a frame lost in recording - is an error naming them, unless allow_frame_gaps: then a warning,
+  // and motion stereo spans the gap with the CAN motion over its real time.
+  bool allow_frame_gaps = false;
+  double max_frame_gap = 1.5;     // > 1
   // Cameras with no mask (neither masks/<camera>.png in the drive nor `mask:` in rig.yaml): estimate
   // what lies beyond the field from the drive's first mask_estimate_s seconds (EstimateFieldMask).
   bool estimate_masks = true;
