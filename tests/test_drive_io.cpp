@@ -246,6 +246,25 @@ void TestProcessDrive() {
   const dps::DriveSummary across = dps::ProcessDrive(gap.string(), (kTmp / "out_gap").string(), o);
   CHECK_EQ(across.frames, 5);
   CHECK(across.ToJson().find("frames 2 and 3 are 0.1333334 s apart") != std::string::npos);
+  // An image lost from one camera's folder (left 000003.png): an error naming it; with
+  // allow_frame_gaps the frames both cameras have (0, 1, 2, 4: right ends at 4), as frames 0, 1, 2
+  // and 4 of the outputs - never paired by position.
+  const fs::path holes = kTmp / "drives" / "holes";
+  fs::copy(kTmp / "drives" / "lead", holes, fs::copy_options::recursive);
+  fs::remove(holes / "left" / "000003.png");
+  o.allow_frame_gaps = false;
+  CHECK_THROWS_WITH(dps::ProcessDrive(holes.string(), (kTmp / "out_holes").string(), o), dps::Error,
+                    "left: frame 3 missing (000002.png is followed by 000004.png)");
+  o.allow_frame_gaps = true;
+  o.map_png = true;
+  const dps::DriveSummary holed = dps::ProcessDrive(holes.string(), (kTmp / "out_holes").string(), o);
+  CHECK_EQ(holed.frames, 4);
+  CHECK(holed.ToJson().find("1 of frames 0..4 missing") != std::string::npos);
+  for (const dps::Detection& d : dps::ReadDetections((kTmp / "out_holes" / "holes" / "detections.csv").string())) {
+    CHECK(d.frame != 3 && d.frame >= 0 && d.frame <= 4);
+  }
+  CHECK(fs::exists(kTmp / "out_holes" / "holes" / "map" / "000004.png"));
+  CHECK(!fs::exists(kTmp / "out_holes" / "holes" / "map" / "000003.png"));
   o.allow_frame_gaps = false;
   // Numbers without zero padding are ordered by number (2.png before 10.png); a gap, a number
   // twice or a file without a number are errors naming the frame.

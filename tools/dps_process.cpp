@@ -32,9 +32,10 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --no-video            no map video
   --truncate            left and right differ: process the frame numbers both have
                         (image folders pair by file number; videos by position)
-  --allow-gaps          frames.csv with consecutive frames more than 1.5 median intervals apart
-                        (a frame lost in recording): process across the gap with a warning
-                        instead of failing the drive
+  --allow-gaps          a frame lost in recording - a number missing in an image folder, or
+                        consecutive frames in frames.csv more than 1.5 median intervals apart -
+                        is processed across with a warning instead of failing the drive: the
+                        frame numbers both cameras have, at their own times (never by position)
   --no-mask-estimate    cameras without a mask: the model's field alone (no estimate from the images)
   --mask-seconds S      estimate masks from the first S seconds (default 2)
   --image-fps F         frame rate of image folders without frames.csv (default 30)

@@ -28,9 +28,9 @@ long FrameNumber(const fs::path& file) {
 class ImageFolder : public FrameSource {
  public:
   // Images in the order of their numbers (so that 2.png comes before 10.png); a file without a
-  // number, two files of one number, or a number missing between the first and the last is an
-  // error naming the frame.
-  explicit ImageFolder(const fs::path& dir) : dir_(dir) {
+  // number, two files of one number, or (unless allow_gaps) a number missing between the first and
+  // the last is an error naming the frame.
+  ImageFolder(const fs::path& dir, bool allow_gaps) : dir_(dir) {
     std::vector<std::pair<long, std::string>> numbered;
     for (const auto& e : fs::directory_iterator(dir)) {
       std::string ext = e.path().extension().string();
@@ -47,17 +47,24 @@ class ImageFolder : public FrameSource {
     for (size_t i = 1; i < numbered.size(); ++i) {
       const long a = numbered[i - 1].first, b = numbered[i].first;
       if (a == b) throw Error(Str(dir.string(), ": frame ", b, " twice (", numbered[i - 1].second, ", ", numbered[i].second, ")"));
-      if (b != a + 1) {
+      if (b != a + 1 && !allow_gaps) {
         throw Error(Str(dir.string(), ": frame ", a + 1, (b > a + 2 ? Str(" to ", b - 1) : std::string()), " missing (",
                         fs::path(numbered[i - 1].second).filename().string(), " is followed by ",
                         fs::path(numbered[i].second).filename().string(), ")"));
       }
     }
-    first_number_ = numbered.front().first;
-    for (auto& [n, file] : numbered) files_.push_back(std::move(file));
+    for (auto& [n, file] : numbered) {
+      numbers_.push_back(n);
+      files_.push_back(std::move(file));
+    }
   }
-  long first_number() const override { return first_number_; }
+  long first_number() const override { return numbers_.front(); }
+  std::vector<long> numbers() const override { return numbers_; }
   void Skip(int frames) override { next_ = std::min(files_.size(), next_ + static_cast<size_t>(std::max(frames, 0))); }
+  void SkipTo(long number) override {
+    const size_t at = std::lower_bound(numbers_.begin(), numbers_.end(), number) - numbers_.begin();
+    next_ = std::max(next_, at);
+  }
   bool Read(cv::Mat* image) override {
     if (next_ >= files_.size()) return false;
     *image = cv::imread(files_[next_], cv::IMREAD_COLOR);
@@ -72,8 +79,8 @@ class ImageFolder : public FrameSource {
  private:
   fs::path dir_;
   std::vector<std::string> files_;
+  std::vector<long> numbers_;  // the files' numbers, ascending
   size_t next_ = 0;
-  long first_number_ = 0;
 };
 
 class VideoFile : public FrameSource {
@@ -83,9 +90,15 @@ class VideoFile : public FrameSource {
     count_ = static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_COUNT));
     fps_ = capture_.get(cv::CAP_PROP_FPS);
   }
-  bool Read(cv::Mat* image) override { return capture_.read(*image) && !image->empty(); }
+  bool Read(cv::Mat* image) override {
+    ++next_;
+    return capture_.read(*image) && !image->empty();
+  }
   void Skip(int frames) override {
-    for (int i = 0; i < frames && capture_.grab(); ++i) {}
+    for (int i = 0; i < frames && capture_.grab(); ++i) ++next_;
+  }
+  void SkipTo(long number) override {
+    if (number > next_) Skip(static_cast<int>(std::min<long>(number - next_, count_)));
   }
   int count() const override { return count_; }
   double fps() const override { return fps_; }
@@ -96,13 +109,21 @@ class VideoFile : public FrameSource {
   cv::VideoCapture capture_;
   int count_ = 0;
   double fps_ = 0.0;
+  long next_ = 0;  // the number of the next frame Read returns
 };
 
 }  // namespace
 
-std::unique_ptr<FrameSource> FrameSource::Open(const std::string& drive_dir, const std::string& camera) {
+std::vector<long> FrameSource::numbers() const {
+  std::vector<long> n(static_cast<size_t>(std::max(count(), 0)));
+  for (size_t i = 0; i < n.size(); ++i) n[i] = first_number() + static_cast<long>(i);
+  return n;
+}
+
+std::unique_ptr<FrameSource> FrameSource::Open(const std::string& drive_dir, const std::string& camera,
+                                               bool allow_gaps) {
   const fs::path folder = fs::path(drive_dir) / camera;
-  if (fs::is_directory(folder)) return std::make_unique<ImageFolder>(folder);
+  if (fs::is_directory(folder)) return std::make_unique<ImageFolder>(folder, allow_gaps);
   if (fs::is_directory(drive_dir)) {
     for (const auto& e : fs::directory_iterator(drive_dir)) {
       if (e.is_regular_file() && e.path().stem() == camera && e.path().extension() != ".yaml") {

@@ -82,13 +82,14 @@ struct DriveInput {
   Rig rig;
   std::unique_ptr<FrameSource> left, right;
   int frames = 0;
-  int skip_left = 0, skip_right = 0;  // frames before the first number both cameras have
+  std::vector<long> numbers;  // the image numbers processed, left and right alike
+  std::vector<int> ids;       // each one's frame in the outputs: its number - the first one's
   std::vector<double> times;
   CanLog can;
 };
 
-// Consecutive frames (numbered from 0, as processed) more than max_gap median intervals apart.
-std::vector<std::string> FrameGaps(const std::vector<double>& times, double max_gap) {
+// Consecutive frames more than max_gap median intervals apart, named by their ids.
+std::vector<std::string> FrameGaps(const std::vector<double>& times, const std::vector<int>& ids, double max_gap) {
   if (times.size() < 3) return {};  // two steps at least
   std::vector<double> steps;
   for (size_t i = 1; i < times.size(); ++i) steps.push_back(times[i] - times[i - 1]);
@@ -98,7 +99,7 @@ std::vector<std::string> FrameGaps(const std::vector<double>& times, double max_
   std::vector<std::string> gaps;
   for (size_t i = 0; i < steps.size(); ++i) {
     if (steps[i] > max_gap * median) {
-      gaps.push_back(Str("frames ", i, " and ", i + 1, " are ", steps[i], " s apart, ", steps[i] / median,
+      gaps.push_back(Str("frames ", ids[i], " and ", ids[i + 1], " are ", steps[i], " s apart, ", steps[i] / median,
                          " times the median interval of ", median, " s: a frame is missing"));
     }
   }
@@ -109,41 +110,46 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
   if (!fs::is_directory(drive_dir)) throw Error(Str(drive_dir, ": not a folder"));
   DriveInput in;
   in.rig = ReadRig((fs::path(drive_dir) / "rig.yaml").string());
-  in.left = FrameSource::Open(drive_dir, "left");
-  in.right = FrameSource::Open(drive_dir, "right");
+  in.left = FrameSource::Open(drive_dir, "left", o.allow_frame_gaps);
+  in.right = FrameSource::Open(drive_dir, "right", o.allow_frame_gaps);
   // Left and right frames pair by number (image folders; videos carry none and start at 0).
-  const long l0 = in.left->first_number(), r0 = in.right->first_number();
-  const long first = std::max(l0, r0);
-  const long last = std::min(l0 + in.left->count(), r0 + in.right->count()) - 1;
-  if (l0 != r0 || in.left->count() != in.right->count()) {
-    const std::string frames = Str(in.left->description(), " has frames ", l0, "..", l0 + in.left->count() - 1, ", ",
-                                   in.right->description(), " has ", r0, "..", r0 + in.right->count() - 1);
+  const std::vector<long> ln = in.left->numbers(), rn = in.right->numbers();
+  if (ln.empty() || rn.empty()) throw Error(Str(drive_dir, ": ", (ln.empty() ? in.left : in.right)->description(), " has no frames"));
+  std::set_intersection(ln.begin(), ln.end(), rn.begin(), rn.end(), std::back_inserter(in.numbers));
+  const std::string frames = Str(in.left->description(), " has frames ", ln.front(), "..", ln.back(), ", ",
+                                 in.right->description(), " has ", rn.front(), "..", rn.back());
+  if (ln.front() != rn.front() || ln.back() != rn.back()) {
     if (!o.truncate) throw Error(Str(drive_dir, ": ", frames, " (--truncate keeps the frame numbers both have)"));
-    if (last < first) throw Error(Str(drive_dir, ": ", frames, ": no frame number in both"));
-    s->warnings.push_back(Str(frames, "; processing frames ", first, "..", last, ", those both have, as frames 0..", last - first));
+    if (in.numbers.empty()) throw Error(Str(drive_dir, ": ", frames, ": no frame number in both"));
+    s->warnings.push_back(Str(frames, "; processing frames ", in.numbers.front(), "..", in.numbers.back(),
+                              ", those both have, as frames 0..", in.numbers.back() - in.numbers.front()));
   }
-  in.skip_left = static_cast<int>(first - l0);
-  in.skip_right = static_cast<int>(first - r0);
-  in.left->Skip(in.skip_left);
-  in.right->Skip(in.skip_right);
-  in.frames = static_cast<int>(last - first + 1);
-  const int offset = static_cast<int>(first - std::min(l0, r0));
+  if (in.numbers.empty()) throw Error(Str(drive_dir, ": ", frames, ": no frame number in both"));
+  const long first = in.numbers.front(), base = std::min(ln.front(), rn.front());
+  const long span = in.numbers.back() - first + 1;
+  if (static_cast<long>(in.numbers.size()) != span) {
+    // Only with allow_frame_gaps: image folders with gaps open only then.
+    s->warnings.push_back(Str(span - static_cast<long>(in.numbers.size()), " of frames ", first, "..", in.numbers.back(),
+                              " missing in ", in.left->description(), " or ", in.right->description(),
+                              "; processing the ", in.numbers.size(), " both have, across the gaps"));
+  }
+  in.frames = static_cast<int>(in.numbers.size());
+  for (const long n : in.numbers) in.ids.push_back(static_cast<int>(n - first));
   const fs::path frames_csv = fs::path(drive_dir) / "frames.csv";
   if (fs::exists(frames_csv)) {
     // Frame k of frames.csv is image number (the smaller first number) + k.
-    in.times = ReadFrameTimes(frames_csv.string());
-    if (static_cast<int>(in.times.size()) < offset + in.frames) {
-      throw Error(Str(frames_csv.string(), ": ", in.times.size(), " frames listed, the images have ", offset + in.frames));
+    const std::vector<double> listed = ReadFrameTimes(frames_csv.string());
+    if (static_cast<long>(listed.size()) < in.numbers.back() - base + 1) {
+      throw Error(Str(frames_csv.string(), ": ", listed.size(), " frames listed, the images have ", in.numbers.back() - base + 1));
     }
-    in.times.erase(in.times.begin(), in.times.begin() + offset);
-    in.times.resize(in.frames);
-    for (const std::string& gap : FrameGaps(in.times, o.max_frame_gap)) {
+    for (const long n : in.numbers) in.times.push_back(listed[static_cast<size_t>(n - base)]);
+    for (const std::string& gap : FrameGaps(in.times, in.ids, o.max_frame_gap)) {
       if (!o.allow_frame_gaps) throw Error(Str(frames_csv.string(), ": ", gap, " (--allow-gaps processes across it)"));
       s->warnings.push_back(Str("frames.csv: ", gap));
     }
   } else {
     const double fps = in.left->fps() > 0 ? in.left->fps() : o.image_fps;
-    for (int i = 0; i < in.frames; ++i) in.times.push_back((offset + i) / fps);
+    for (const long n : in.numbers) in.times.push_back(static_cast<double>(n - base) / fps);
   }
   in.can = ReadCanLog((fs::path(drive_dir) / "can.csv").string(), o.can);
   for (const std::string& w : in.can.warnings) s->warnings.push_back(w);
@@ -160,14 +166,14 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
 // A camera's first frames, over the drive's first `seconds`.
 std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& camera, const DriveInput& in,
                                  double seconds) {
-  std::unique_ptr<FrameSource> source = FrameSource::Open(drive_dir, camera.name);
-  source->Skip(camera.name == "left" ? in.skip_left : camera.name == "right" ? in.skip_right : 0);
+  std::unique_ptr<FrameSource> source = FrameSource::Open(drive_dir, camera.name, true);
   std::vector<cv::Mat> frames;
   cv::Mat image;
   for (int i = 0; i < in.frames && (i == 0 || in.times[i] - in.times[0] <= seconds); ++i) {
+    source->SkipTo(in.numbers[i]);
     if (!source->Read(&image)) break;
     if (image.cols != camera.model.width() || image.rows != camera.model.height()) {
-      throw Error(Str(drive_dir, ": frame ", i, ": ", camera.name, " is ", image.cols, "x", image.rows,
+      throw Error(Str(drive_dir, ": frame ", in.ids[i], ": ", camera.name, " is ", image.cols, "x", image.rows,
                       " but rig.yaml's camera is ", camera.model.width(), "x", camera.model.height()));
     }
     frames.push_back(image.clone());
@@ -353,9 +359,9 @@ class DriveRun {
 // writing. It runs alongside the next frame's stereo (SurroundPipeline::Process), in order.
 void DriveRun::Finish(FrameOutput& out, int f) {
   auto t2 = Clock::now();
-  const std::vector<TrackState> frame_tracks = tracker_.Update(f, in_.times[f], ego_, out.detections);
+  const std::vector<TrackState> frame_tracks = tracker_.Update(in_.ids[f], in_.times[f], ego_, out.detections);
   char caption[128];
-  std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), f, in_.times[f],
+  std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), in_.ids[f], in_.times[f],
                 out.detections.size());
   grid_.Update(ego_, out.coverage, out.detections);
   if (pictures_.WantsMap()) {
@@ -366,7 +372,7 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   }
   auto t3 = Clock::now();
   map_s_ += Seconds(t2, t3);
-  if (pictures_.WantsMap()) pictures_.WriteMap(map_, f);
+  if (pictures_.WantsMap()) pictures_.WriteMap(map_, in_.ids[f]);
   if (o_.diagnostics) pictures_.WriteDiagnostics(out, pipeline_options_, f, in_.frames / 2);
   write_ += Seconds(t3, Clock::now());
   for (Detection& d : out.detections) detections_.push_back(std::move(d));
@@ -376,7 +382,10 @@ void DriveRun::Finish(FrameOutput& out, int f) {
 // (seconds summed over both).
 void DriveRun::Read(FrameSource& source, cv::Mat* image, int f) {
   const auto t0 = Clock::now();
-  if (!source.Read(image)) throw Error(Str(drive_dir_, ": frame ", f, " could not be read (the stream ended early)"));
+  source.SkipTo(in_.numbers[f]);
+  if (!source.Read(image)) {
+    throw Error(Str(drive_dir_, ": frame ", in_.ids[f], " could not be read (the stream ended early)"));
+  }
   const double seconds = Seconds(t0, Clock::now());
   std::lock_guard<std::mutex> lock(decode_mutex_);
   decode_ += seconds;
@@ -386,14 +395,14 @@ void DriveRun::Read(FrameSource& source, cv::Mat* image, int f) {
 FrameInput DriveRun::Input(const cv::Mat& l, const cv::Mat& r, int f) {
   const CameraModel& model = in_.rig.Camera("left").model;
   if (l.size() != r.size()) {
-    throw Error(Str(drive_dir_, ": frame ", f, ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
+    throw Error(Str(drive_dir_, ": frame ", in_.ids[f], ": left is ", l.cols, "x", l.rows, ", right ", r.cols, "x", r.rows));
   }
   if (l.cols != model.width() || l.rows != model.height()) {
-    throw Error(Str(drive_dir_, ": frame ", f, " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
+    throw Error(Str(drive_dir_, ": frame ", in_.ids[f], " is ", l.cols, "x", l.rows, " but rig.yaml's cameras are ",
                     model.width(), "x", model.height()));
   }
   FrameInput input;
-  input.frame = f;
+  input.frame = in_.ids[f];
   input.t_s = in_.times[f];
   input.left = l;
   input.right = r;
@@ -402,7 +411,7 @@ FrameInput DriveRun::Input(const cv::Mat& l, const cv::Mat& r, int f) {
     input.motion_known = MotionBetween(in_.can, in_.times[f - 1], in_.times[f], &input.current_in_previous, &why);
     if (!input.motion_known) {
       ++s_.frames_without_motion;
-      s_.warnings.push_back(Str("frame ", f, ": no known motion (", why, "); side detection skipped"));
+      s_.warnings.push_back(Str("frame ", in_.ids[f], ": no known motion (", why, "); side detection skipped"));
     }
   }
   return input;

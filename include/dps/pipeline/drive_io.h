@@ -23,16 +23,23 @@ class FrameSource {
  public:
   // Opens <drive>/<camera>/ (numbered images in the order of their numbers: 000000.png, ... or
   // 0.png, 1.png, ...) or <drive>/<camera>.<ext> (video). Throws dps::Error naming what is missing,
-  // an image without a number, a frame number found twice or missing between the first and last.
-  static std::unique_ptr<FrameSource> Open(const std::string& drive_dir, const std::string& camera);
+  // an image without a number, a frame number found twice or - unless allow_gaps - missing
+  // between the first and last.
+  static std::unique_ptr<FrameSource> Open(const std::string& drive_dir, const std::string& camera,
+                                           bool allow_gaps = false);
   virtual ~FrameSource() = default;
   // The next frame, or false at the end. Throws dps::Error naming an unreadable image.
   virtual bool Read(cv::Mat* image) = 0;
   virtual int count() const = 0;       // frames in all (videos: as the container reports)
   // The number of the first frame (image folders: its file's number; videos: 0).
   virtual long first_number() const { return 0; }
+  // The frames' numbers in order (image folders: their files' numbers; videos: 0, 1, ...).
+  virtual std::vector<long> numbers() const;
   // Skips the next `frames` frames.
   virtual void Skip(int frames) = 0;
+  // Skips to frame `number`: the next Read returns it (or the first frame after it, when it is
+  // absent). Never goes back.
+  virtual void SkipTo(long number) = 0;
   virtual double fps() const = 0;      // 0 when unknown (image folders)
   virtual std::string description() const = 0;
 };
