@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 
 #include "check.h"
 #include "dps/detect/detection.h"
 #include "dps/map/tracker.h"
+#include "dps/map/tracks_io.h"
 #include "dps/util/error.h"
 
 namespace {
@@ -88,6 +90,48 @@ void TestTracks() {
   std::vector<dps::TrackState> left;
   for (int f = 60; f < 70; ++f) left = tracker.Update(f, f * dt, ego, {});
   CHECK(left.empty());
+}
+
+// Track sizes: a car crossing ahead (heading +X at 6 m/s, 4.5 m x 1.8 m) and a parked one (along
+// +Z), each detected as the outline of its footprint: length along the track's axis, width across
+// it; written to tracks.csv and read back.
+void TestTrackSize() {
+  dps::Tracker tracker;
+  const dps::PlanarPose ego;
+  const double dt = 1.0 / 15;
+  std::vector<dps::TrackState> last;
+  for (int f = 0; f < 40; ++f) {
+    const double t = f * dt;
+    auto outline = [](double cx, double cz, double half_x, double half_z) {
+      std::vector<Eigen::Vector2d> p;
+      for (double u = -1; u <= 1.0001; u += 0.1) {
+        p.emplace_back(cx + u * half_x, cz - half_z);
+        p.emplace_back(cx + u * half_x, cz + half_z);
+        p.emplace_back(cx - half_x, cz + u * half_z);
+        p.emplace_back(cx + half_x, cz + u * half_z);
+      }
+      return p;
+    };
+    dps::Detection crossing = dps::DetectionFromPoints(outline(-10 + 6 * t, 15, 2.25, 0.9), "front");
+    dps::Detection parked = dps::DetectionFromPoints(outline(4, 8, 0.9, 2.25), "front");
+    crossing.frame = parked.frame = f;
+    last = tracker.Update(f, t, ego, {crossing, parked});
+  }
+  CHECK_EQ(last.size(), size_t{2});
+  for (const dps::TrackState& s : last) {
+    std::printf("track at (%.1f, %.1f): length %.2f m, width %.2f m\n", s.x_m, s.z_m, s.length_m, s.width_m);
+    CHECK_NEAR(s.length_m, 4.5, 0.05);
+    CHECK_NEAR(s.width_m, 1.8, 0.05);
+  }
+  const std::string path = (std::filesystem::temp_directory_path() / "dps_test_tracker_sizes.csv").string();
+  dps::WriteTracks(last, path);
+  const std::vector<dps::TrackState> back = dps::ReadTracks(path);
+  CHECK_EQ(back.size(), size_t{2});
+  for (size_t i = 0; i < back.size() && i < last.size(); ++i) {
+    CHECK_NEAR(back[i].length_m, last[i].length_m, 1e-6);
+    CHECK_NEAR(back[i].width_m, last[i].width_m, 1e-6);
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace
@@ -343,5 +387,6 @@ int main() {
   TestRegisterPoints();
   TestCreepingEdge();
   TestStandingModel();
+  TestTrackSize();
   return dps_test::Report();
 }

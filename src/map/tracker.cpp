@@ -357,6 +357,35 @@ Tracker::Association Tracker::Associate(const Measurements& m, const Eigen::Matr
   return a;
 }
 
+namespace {
+
+// The object's size from its hits' extents (each an axis-aligned box in its frame's vehicle axes):
+// the 80th percentile of their extents along `axis` (unit, world) and across it.
+Eigen::Vector2d SizeOf(const std::vector<std::pair<Eigen::Vector2d, Eigen::Matrix2d>>& extents,
+                       const Eigen::Vector2d& axis) {
+  if (extents.empty()) return {0, 0};
+  std::vector<double> along, across;
+  for (const auto& [box, Rwv] : extents) {
+    const Eigen::Vector2d a = (Rwv.transpose() * axis).cwiseAbs();  // the axis in that frame
+    along.push_back(box.x() * a.x() + box.y() * a.y());
+    across.push_back(box.x() * a.y() + box.y() * a.x());
+  }
+  const size_t at = static_cast<size_t>(0.8 * (along.size() - 1) + 0.5);
+  std::nth_element(along.begin(), along.begin() + at, along.end());
+  std::nth_element(across.begin(), across.begin() + at, across.end());
+  return {along[at], across[at]};
+}
+
+// Keeps a hit's extent (x, z sizes in the vehicle frame) with that frame's world_from_vehicle.
+void AddExtent(const Detection& d, const Eigen::Matrix2d& Rwv,
+               std::vector<std::pair<Eigen::Vector2d, Eigen::Matrix2d>>* extents) {
+  constexpr size_t kKept = 30;
+  extents->emplace_back(Eigen::Vector2d(d.x_max_m - d.x_min_m, d.z_max_m - d.z_min_m), Rwv);
+  if (extents->size() > kKept) extents->erase(extents->begin());
+}
+
+}  // namespace
+
 // Updates the tracks with their detections (the others count a miss) and drops the lost ones;
 // returns which detections were used.
 std::vector<bool> Tracker::UpdateTracks(double t_s, const std::vector<Detection>& detections, const Measurements& ms,
@@ -386,6 +415,7 @@ std::vector<bool> Tracker::UpdateTracks(double t_s, const std::vector<Detection>
     }
     ApplyMotion(detections[j], Rwv, options_.motion_gate_chi2, &t);
     ApplyRegistration(t_s, ms.points[j], !ms.clipped_ends[j].empty(), Rwv, &t);
+    AddExtent(detections[j], Rwv, &t.extents);
     ++t.hits;
     t.misses = 0;
     if (t.hits >= options_.confirm_hits) t.confirmed = true;
@@ -395,6 +425,7 @@ std::vector<bool> Tracker::UpdateTracks(double t_s, const std::vector<Detection>
                 tracks_.end());
   return used;
 }
+
 
 // A new track for each detection no track took.
 void Tracker::StartTracks(double t_s, const std::vector<Detection>& detections, const Measurements& m,
@@ -413,6 +444,7 @@ void Tracker::StartTracks(double t_s, const std::vector<Detection>& detections, 
     t.P(4, 4) = options_.init_turn_sigma_radps * options_.init_turn_sigma_radps;
     ApplyMotion(detections[j], Rwv, std::numeric_limits<double>::infinity(), &t);
     ApplyRegistration(t_s, m.points[j], !m.clipped_ends[j].empty(), Rwv, &t);
+    AddExtent(detections[j], Rwv, &t.extents);
     t.hits = 1;
     t.confirmed = options_.confirm_hits <= 1;
     tracks_.push_back(t);
@@ -440,6 +472,9 @@ std::vector<TrackState> Tracker::Report(int frame, double t_s, const PlanarPose&
     s.sigma_x_m = std::sqrt(std::max(0.0, cov(0, 0)));
     s.sigma_z_m = std::sqrt(std::max(0.0, cov(1, 1)));
     s.age = t.age;
+    const Eigen::Vector2d size = SizeOf(t.extents, Axis(t, Rwv));
+    s.length_m = size.x();
+    s.width_m = size.y();
     s.confirmed = t.confirmed;
     // Prediction ahead, in the current vehicle frame (the ego's own motion is not predicted).
     const double h = options_.predict_ahead_s;

@@ -100,6 +100,11 @@ struct TrackState {
   double vx_mps = 0.0, vz_mps = 0.0; // ground velocity, vehicle frame axes
   double sigma_x_m = 0.0, sigma_z_m = 0.0;
   int age = 0;                       // frames since the track was born
+  // The object's size on the ground as its detections showed it: the 80th percentile of their
+  // extents along the track's current axis (its velocity above axis_min_speed_mps, else the
+  // vehicle's heading) and across it, over its last 30 hits. A lower bound of the object's footprint where
+  // the cameras saw only part of it. tracks.csv's extra columns length, width.
+  double length_m = 0.0, width_m = 0.0;
   bool confirmed = false;
   Eigen::Vector2d predicted{0, 0};   // position predict_ahead_s ahead (vehicle frame now)
   Eigen::Matrix2d predicted_cov = Eigen::Matrix2d::Identity();
@@ -131,6 +136,9 @@ class Tracker {
     double standing_log_odds = 0.0;
     // The last hits' times and ground points (world), for the registration velocity.
     std::vector<std::pair<double, std::vector<Eigen::Vector2d>>> shapes;
+    // The last hits' extents (x and z sizes in their frame's vehicle axes) with that frame's
+    // world_from_vehicle rotation, for the size along and across the track's current axis.
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Matrix2d>> extents;
   };
   // A frame's detections in the world: nearest points z, all ground points, the ends the view cut,
   // and the measurement covariances.
