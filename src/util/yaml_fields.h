@@ -33,8 +33,12 @@ inline cv::FileStorage OpenForReading(const std::string& path) {
   cv::FileStorage fs;
   try {
     fs = OpenWithin(path, 10.0);
+  } catch (const Error&) {
+    throw;
   } catch (const cv::Exception& e) {
     throw Error(Str(path, ": not a valid OpenCV YAML/XML file: ", OneLine(e)));
+  } catch (const std::exception& e) {  // OpenCV's parser lets e.g. std::length_error out
+    throw Error(Str(path, ": not a valid OpenCV YAML/XML file (", e.what(), ")"));
   }
   if (!fs.isOpened()) throw Error(Str(path, ": cannot open as an OpenCV YAML/XML file"));
   return fs;
