@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -98,7 +99,7 @@ class VideoFile : public FrameSource {
     for (int i = 0; i < frames && capture_.grab(); ++i) ++next_;
   }
   void SkipTo(long number) override {
-    if (number > next_) Skip(static_cast<int>(std::min<long>(number - next_, count_)));
+    if (number > next_) Skip(static_cast<int>(std::min<long>(number - next_, std::numeric_limits<int>::max())));
   }
   int count() const override { return count_; }
   double fps() const override { return fps_; }

@@ -124,7 +124,6 @@ DriveInput OpenDrive(const std::string& drive_dir, const DriveOptions& o, DriveS
     s->warnings.push_back(Str(frames, "; processing frames ", in.numbers.front(), "..", in.numbers.back(),
                               ", those both have, as frames 0..", in.numbers.back() - in.numbers.front()));
   }
-  if (in.numbers.empty()) throw Error(Str(drive_dir, ": ", frames, ": no frame number in both"));
   const long first = in.numbers.front(), base = std::min(ln.front(), rn.front());
   const long span = in.numbers.back() - first + 1;
   if (static_cast<long>(in.numbers.size()) != span) {
