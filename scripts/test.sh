@@ -4,7 +4,7 @@
 #   scripts/test.sh --sanitize   also an AddressSanitizer + UndefinedBehaviorSanitizer build in
 #                                build-sanitize/ running every test but the slow-labelled renders,
 #                                and, where clang++ is installed, a fuzzing smoke run of every
-#                                reader (scripts/fuzz.sh, DPS_FUZZ_SECONDS each, default 60)
+#                                reader (scripts/fuzz.sh, DPS_FUZZ_SECONDS each, default 60; 0 = none)
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD_DIR=${DPS_BUILD_DIR:-$ROOT/build}
@@ -18,7 +18,9 @@ if [ "${1:-}" = "--sanitize" ]; then
   # Leaks are not errors (OpenCV's backends keep caches); any other report fails the test.
   export ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   (cd "$SAN_DIR" && ctest --output-on-failure -j "$JOBS" -LE slow)
-  if command -v clang++ >/dev/null 2>&1; then
+  if [ "${DPS_FUZZ_SECONDS:-60}" = 0 ]; then
+    echo "test.sh: DPS_FUZZ_SECONDS=0: no fuzzing smoke run" >&2
+  elif command -v clang++ >/dev/null 2>&1; then
     "$ROOT/scripts/fuzz.sh" "${DPS_FUZZ_SECONDS:-60}"
   else
     echo "test.sh: clang++ not installed: no fuzzing smoke run (scripts/fuzz.sh needs it)" >&2
