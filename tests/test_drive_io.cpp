@@ -181,6 +181,47 @@ void CheckDriveMask(const fs::path& drive, const fs::path& out_root, const dps::
   fs::remove_all(drive / "masks");
 }
 
+// The grid written every 2nd frame: 16-bit pictures of the grid's size, grid.csv naming each with
+// its origin and the vehicle's pose, summary.json the encoding; each detection of a written frame
+// lies on a cell of positive evidence when mapped through grid.csv's pose and origin.
+void CheckGridFiles(const fs::path& drive, const fs::path& out_root, dps::DriveOptions o) {
+  o.grid_every = 2;
+  o.map_png = false;
+  const dps::DriveSummary s = dps::ProcessDrive(drive.string(), out_root.string(), o);
+  const fs::path out = out_root / drive.filename();
+  const dps::CsvTable index = dps::CsvTable::Read((out / "grid" / "grid.csv").string());
+  CHECK_EQ(index.rows(), size_t{3});  // frames 0, 2, 4 of 6
+  CHECK(s.ToJson().find("\"grid\": {") != std::string::npos);
+  const double per_step = 1.0 / s.grid_scale;
+  const std::vector<dps::Detection> dets = dps::ReadDetections((out / "detections.csv").string());
+  int checked = 0;
+  for (size_t r = 0; r < index.rows(); ++r) {
+    const int frame = index.Integer(r, index.Column("frame"));
+    const cv::Mat grid = cv::imread((out / index.Text(r, index.Column("file"))).string(), cv::IMREAD_UNCHANGED);
+    CHECK_EQ(grid.type(), CV_16U);
+    CHECK_EQ(grid.rows, s.grid_cells);
+    const dps::PlanarPose pose{index.Number(r, index.Column("vehicle_x")), index.Number(r, index.Column("vehicle_z")),
+                               index.Number(r, index.Column("vehicle_heading_deg")) * M_PI / 180.0};
+    const Eigen::Vector2d origin(index.Number(r, index.Column("origin_x")), index.Number(r, index.Column("origin_z")));
+    for (const dps::Detection& d : dets) {
+      if (d.frame != frame) continue;
+      const Eigen::Vector2d w = dps::BodyToWorld(pose, {d.x_m, d.z_m});
+      const int c = static_cast<int>(std::floor((w.x() - origin.x()) / s.grid_cell_m));
+      const int row = s.grid_cells - 1 - static_cast<int>(std::floor((w.y() - origin.y()) / s.grid_cell_m));
+      double best = -1e9;  // the nearest point lies on the surface: the cell or its neighbour
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          best = std::max(best, (grid.at<unsigned short>(row + dr, c + dc) - 32768.0) * per_step);
+        }
+      }
+      CHECK(best > 0);
+      ++checked;
+    }
+  }
+  std::printf("grid files: %zu written, %d detections on occupied cells checked\n", index.rows(), checked);
+  CHECK(checked >= 1);
+}
+
 void TestProcessDrive() {
   dps::Scene scene = dps_test::SmallScene("lead_car", 320, 240);
   dps::SynthOptions so;
@@ -220,6 +261,7 @@ void TestProcessDrive() {
     CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
   }
   CheckDriveMask(kTmp / "drives" / "lead", kTmp / "out_masked", o);
+  CheckGridFiles(kTmp / "drives" / "lead", kTmp / "out_grid", o);
   // Left and right of different lengths: an error naming both, no output left behind.
   fs::remove(kTmp / "drives" / "lead" / "right" / "000005.png");
   CHECK_THROWS_WITH(dps::ProcessDrive((kTmp / "drives" / "lead").string(), (kTmp / "out2").string(), o), dps::Error,

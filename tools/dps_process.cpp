@@ -30,6 +30,9 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --diagnostics         also write diagnostics.avi: six panels per source (views, composite,
                         disparity, column histogram, obstacles) and diagnostics_middle.png
   --no-video            no map video
+  --grid-every N        every N-th frame, the occupancy grid as grid/NNNNNN.png (16-bit evidence:
+                        (value - 32768) * evidence_per_step, summary.json's "grid"; +Z up) with
+                        grid/grid.csv (each file's world origin and the vehicle's pose)
   --truncate            left and right differ: process the frame numbers both have
                         (image folders pair by file number; videos by position)
   --allow-gaps          a frame lost in recording - a number missing in an image folder, or
@@ -88,7 +91,7 @@ int main(int argc, char** argv) {
   return dps_cli::Run("dps-process", [&] {
     const dps_cli::Args args(argc, argv,
                              {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
-                              "yaw-scale", "time-column", "yaw-file", "mask-seconds"},
+                              "yaw-scale", "time-column", "yaw-file", "mask-seconds", "grid-every"},
                              {"force", "map-png", "no-video", "truncate", "allow-gaps", "quiet", "diagnostics", "no-mask-estimate"});
     if (args.help()) {
       std::cout << kUsage;
@@ -110,6 +113,8 @@ int main(int argc, char** argv) {
     options.map_video = !args.Has("no-video");
     options.map_png = args.Has("map-png");
     options.diagnostics = args.Has("diagnostics");
+    options.grid_every = args.Integer("grid-every", 0);
+    if (options.grid_every < 0) throw dps::Error("option --grid-every: expected >= 0");
     options.truncate = args.Has("truncate");
     options.allow_frame_gaps = args.Has("allow-gaps");
     options.estimate_masks = !args.Has("no-mask-estimate");

@@ -262,6 +262,13 @@ double OccupancyGrid::At(const Eigen::Vector2d& w) const {
   return sum_.at<float>(r, c);
 }
 
+cv::Mat OccupancyGrid::EvidenceImage() const {
+  cv::Mat flipped, image;
+  cv::flip(sum_, flipped, 0);  // row 0 = the largest z
+  flipped.convertTo(image, CV_16U, EvidenceScale(), 32768.0);  // saturating, rounded
+  return image;
+}
+
 double OccupancyGrid::AtVehicle(const Eigen::Vector2d& v) const { return At(BodyToWorld(pose_, v)); }
 
 void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, const std::vector<Detection>& detections) {

@@ -54,7 +54,13 @@ std::string DriveSummary::ToJson() const {
       << ", \"valid_fraction\": " << m.valid_fraction << "}";
     first_mask = false;
   }
-  o << "},\n  \"stage_seconds\": {";
+  o << "}";
+  if (grid_every > 0) {
+    o << ",\n  \"grid\": {\"files\": \"grid/NNNNNN.png, grid/grid.csv\", \"every\": " << grid_every
+      << ", \"cell_m\": " << grid_cell_m << ", \"cells\": " << grid_cells << ", \"evidence_per_step\": "
+      << 1.0 / grid_scale << ", \"zero\": 32768}";
+  }
+  o << ",\n  \"stage_seconds\": {";
   bool first = true;
   for (const auto& [k, v] : stage_seconds) {
     o << (first ? "" : ", ") << JsonString(k) << ": " << v;
@@ -332,6 +338,7 @@ class DriveRun {
 
  private:
   void Finish(FrameOutput& out, int f);
+  void WriteGrid(int f);
   void Read(FrameSource& source, cv::Mat* image, int f);
   FrameInput Input(const cv::Mat& l, const cv::Mat& r, int f);
 
@@ -350,6 +357,7 @@ class DriveRun {
   PictureOutputs pictures_;
   const cv::Mat map_background_;
   cv::Mat map_;  // the frame's map picture, drawn into the same buffer every frame
+  std::ostringstream grid_index_;  // grid/grid.csv's rows
   double decode_ = 0, front_ = 0, sides_ = 0, map_s_ = 0, write_ = 0;
   std::mutex decode_mutex_;
 };
@@ -363,6 +371,7 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), in_.ids[f], in_.times[f],
                 out.detections.size());
   grid_.Update(ego_, out.coverage, out.detections);
+  if (o_.grid_every > 0 && f % o_.grid_every == 0) WriteGrid(f);
   if (pictures_.WantsMap()) {
     DrawFrameMap(map_background_, grid_, in_.rig.vehicle, out.detections, frame_tracks, o_.map, caption, map_);
   }
@@ -375,6 +384,22 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   if (o_.diagnostics) pictures_.WriteDiagnostics(out, pipeline_options_, f, in_.frames / 2);
   write_ += Seconds(t3, Clock::now());
   for (Detection& d : out.detections) detections_.push_back(std::move(d));
+}
+
+// Frame f's grid as grid/<frame>.png, with its row of grid.csv.
+void DriveRun::WriteGrid(int f) {
+  if (grid_index_.tellp() == 0) {
+    fs::create_directories(tmp_ / "grid");
+    grid_index_ << "frame,t,file,origin_x,origin_z,vehicle_x,vehicle_z,vehicle_heading_deg\n";
+  }
+  char name[32];
+  std::snprintf(name, sizeof(name), "%06d.png", in_.ids[f]);
+  if (!cv::imwrite((tmp_ / "grid" / name).string(), grid_.EvidenceImage())) {
+    throw Error(Str(s_.output_dir, ": cannot write grid/", name));
+  }
+  grid_index_ << in_.ids[f] << ',' << Str(in_.times[f]) << ",grid/" << name << ',' << Str(grid_.origin().x()) << ','
+              << Str(grid_.origin().y()) << ',' << Str(ego_.x_m) << ',' << Str(ego_.z_m) << ','
+              << Str(ego_.heading_rad * 180.0 / 3.14159265358979323846) << '\n';
 }
 
 // Decoding: frame f + 1's two images are read alongside frame f's stereo, each by its own task
@@ -451,6 +476,13 @@ void DriveRun::WriteFiles() {
   pictures_.Close();
   WriteDetections(detections_, (tmp_ / "detections.csv").string());
   WriteTracks(tracks_, (tmp_ / "tracks.csv").string());
+  if (o_.grid_every > 0) {
+    WriteFileAtomically((tmp_ / "grid" / "grid.csv").string(), grid_index_.str());
+    s_.grid_every = o_.grid_every;
+    s_.grid_cell_m = grid_.options().cell_m;
+    s_.grid_cells = grid_.options().cells;
+    s_.grid_scale = grid_.EvidenceScale();
+  }
   write_ += Seconds(t4, Clock::now());
   s_.frames = in_.frames;
   s_.detections = static_cast<int>(detections_.size());
@@ -463,6 +495,7 @@ void DriveOptions::Check() const {
   const OptionCheck Require("drive");
   Require(image_fps > 0 && image_fps <= 10000, "image_fps", image_fps, "0 < fps <= 10000");
   Require(mask_estimate_s > 0, "mask_estimate_s", mask_estimate_s, "> 0");
+  Require(grid_every >= 0, "grid_every", grid_every, ">= 0");
   Require(max_frame_gap > 1 && max_frame_gap <= 1000, "max_frame_gap", max_frame_gap, "1 < gap <= 1000 intervals");
   Require(can.max_gap_s > 0, "can.max_gap_s", can.max_gap_s, "> 0");
   Require(std::isfinite(can.speed_scale) && can.speed_scale != 0, "can.speed_scale", can.speed_scale, "finite and != 0");

@@ -56,6 +56,16 @@ class OccupancyGrid {
   // Obstacle cells (sum > strength_threshold) as world points.
   std::vector<Eigen::Vector2d> ObstacleCells() const;
 
+  // The evidence as a 16-bit picture for files (grid/NNNNNN.png): cell (column c, row r) covers
+  // world x in origin.x + [c, c + 1) cell_m and z in origin.z + [cells - 1 - r, cells - r) cell_m
+  // (+Z up, as on the map); value = 32768 + evidence * EvidenceScale(), rounded (0 unknown ->
+  // 32768; the clamp keeps it within 1..65535).
+  cv::Mat EvidenceImage() const;
+  double EvidenceScale() const { return 32767.0 / options_.clamp; }
+  // The world (x, z) of cell (0, 0)'s corner (it moves when the grid re-centres).
+  const Eigen::Vector2d& origin() const { return origin_; }
+  const OccupancyOptions& options() const { return options_; }
+
   // Draws the grid onto a map picture (MapOptions geometry: +Z up, vehicle at the centre):
   // occupied cells dark grey, free cells light green, unknown left as it is.
   void Draw(cv::Mat& map, double map_range_m) const;

@@ -24,6 +24,9 @@ struct DriveOptions {
   bool map_video = true;          // map.avi (MJPG)
   bool map_png = false;           // map/NNNNNN.png
   bool diagnostics = false;       // diagnostics.avi: six panels per source (DrawDiagnostics)
+  // Every grid_every-th frame (0 = none): the occupancy grid as grid/NNNNNN.png (16-bit evidence,
+  // OccupancyGrid::EvidenceImage) and a row of grid/grid.csv (its origin and the vehicle's pose).
+  int grid_every = 0;             // >= 0
   MapOptions map;
   TrackerOptions tracker;
   OccupancyOptions occupancy;
@@ -59,6 +62,10 @@ struct DriveSummary {
   double front_vertical_offset_px = 0.0;  // drift correction of the front pair at the end
   std::string map_video;          // the map video's file name and codec ("map.mp4 (H.264)"); "" = none
   std::map<std::string, MaskSummary> masks;  // by camera; the masks used are written to masks/
+  // The grid files' geometry when they are written (grid_every > 0): cell size, cells per side,
+  // evidence per 16-bit step, the stride.
+  double grid_cell_m = 0.0, grid_scale = 0.0;
+  int grid_cells = 0, grid_every = 0;
   std::vector<std::string> warnings;
   std::map<std::string, double> stage_seconds;  // decode, front, sides, map, write
   double seconds = 0.0;
