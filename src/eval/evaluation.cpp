@@ -94,10 +94,17 @@ bool InZone(const Eigen::Vector2d& p, const EvaluationOptions& options) {
   return p.norm() <= options.max_range_m && options.coverage.Contains(p);
 }
 
-// An object counts when its near point is in the zone and a camera sees it.
-bool Counts(const TruthRow& object, const std::vector<const TruthRow*>& scene, const EvaluationOptions& options) {
-  if (!InZone(NearPoint(object), options)) return false;
-  return !options.visibility || options.visibility->Sees(object, scene);
+// Which truth rows count (by index): the near point in the zone and a camera seeing the object
+// among the other objects of its frame.
+std::vector<bool> CountedRows(const std::vector<TruthRow>& truth, const EvaluationOptions& options) {
+  std::map<int, std::vector<const TruthRow*>> scenes;
+  for (const TruthRow& t : truth) scenes[t.frame].push_back(&t);
+  std::vector<bool> counted(truth.size());
+  for (size_t i = 0; i < truth.size(); ++i) {
+    counted[i] = InZone(NearPoint(truth[i]), options) &&
+                 (!options.visibility || options.visibility->Sees(truth[i], scenes[truth[i].frame]));
+  }
+  return counted;
 }
 
 BandScore* BandOf(EvaluationResult* result, double range) {
@@ -192,6 +199,37 @@ void ScoreDetections(int f, const FrameMatch& m, double vehicle_length_m, Evalua
   }
 }
 
+// Evaluate with the counted rows given (EvaluateTracks reuses them).
+EvaluationResult EvaluateCounted(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
+                                 const std::vector<bool>& counted, const EvaluationOptions& options) {
+  EvaluationResult result = EmptyResult(options);
+  const double length = VehicleLength(options);
+  std::map<int, std::vector<size_t>> truth_by_frame;
+  for (size_t i = 0; i < truth.size(); ++i) truth_by_frame[truth[i].frame].push_back(i);
+  std::map<int, std::vector<const Detection*>> det_by_frame;
+  for (const Detection& d : detections) det_by_frame[d.frame].push_back(&d);
+  std::vector<int> frames;
+  for (const auto& [f, v] : truth_by_frame) frames.push_back(f);
+  for (const auto& [f, v] : det_by_frame) frames.push_back(f);
+  std::sort(frames.begin(), frames.end());
+  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
+  result.frames = static_cast<int>(frames.size());
+  for (const int f : frames) {
+    // Objects in range that a camera sees count (recall); the others can still be what a
+    // detection in the zone sees, and such a detection is not a false one.
+    FrameMatch m;
+    for (const size_t i : truth_by_frame[f]) (counted[i] ? m.objects : m.uncounted).push_back(&truth[i]);
+    for (const Detection* d : det_by_frame[f]) {
+      (InZone({d->x_m, d->z_m}, options) ? m.dets : m.outside).push_back(d);
+    }
+    if (!m.dets.empty()) ++result.frames_with_detections;
+    Match(&m);
+    ScoreObjects(f, m, length, &result);
+    ScoreDetections(f, m, length, &result);
+  }
+  return result;
+}
+
 }  // namespace
 
 double BandScore::Recall() const { return objects ? double(matched_objects) / objects : 1.0; }
@@ -205,33 +243,7 @@ double SourceScore::Precision() const { return detections ? double(matched) / de
 EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
                           const EvaluationOptions& options) {
   options.Check();
-  EvaluationResult result = EmptyResult(options);
-  const double length = VehicleLength(options);
-  std::map<int, std::vector<const TruthRow*>> truth_by_frame;
-  for (const TruthRow& t : truth) truth_by_frame[t.frame].push_back(&t);
-  std::map<int, std::vector<const Detection*>> det_by_frame;
-  for (const Detection& d : detections) det_by_frame[d.frame].push_back(&d);
-  std::vector<int> frames;
-  for (const auto& [f, v] : truth_by_frame) frames.push_back(f);
-  for (const auto& [f, v] : det_by_frame) frames.push_back(f);
-  std::sort(frames.begin(), frames.end());
-  frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
-  result.frames = static_cast<int>(frames.size());
-  for (const int f : frames) {
-    // Objects in range that a camera sees count (recall); the others can still be what a
-    // detection in the zone sees, and such a detection is not a false one.
-    FrameMatch m;
-    const std::vector<const TruthRow*>& scene = truth_by_frame[f];
-    for (const TruthRow* t : scene) (Counts(*t, scene, options) ? m.objects : m.uncounted).push_back(t);
-    for (const Detection* d : det_by_frame[f]) {
-      (InZone({d->x_m, d->z_m}, options) ? m.dets : m.outside).push_back(d);
-    }
-    if (!m.dets.empty()) ++result.frames_with_detections;
-    Match(&m);
-    ScoreObjects(f, m, length, &result);
-    ScoreDetections(f, m, length, &result);
-  }
-  return result;
+  return EvaluateCounted(detections, truth, CountedRows(truth, options), options);
 }
 
 TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std::vector<TruthRow>& truth,
@@ -248,17 +260,18 @@ TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std:
     d.vz_mps = t.vz_mps;
     as_detections.push_back(d);
   }
+  options.Check();
+  const std::vector<bool> counted = CountedRows(truth, options);
   TrackEvaluation out;
-  out.positions = Evaluate(as_detections, truth, options);
+  out.positions = EvaluateCounted(as_detections, truth, counted, options);
   // Identity switches: per frame, match each counted object to its nearest track within the
   // tolerance and compare the track id with the object's previous one.
   std::map<int, std::vector<const Detection*>> by_frame;
   for (const Detection& d : as_detections) by_frame[d.frame].push_back(&d);
-  std::map<int, std::vector<const TruthRow*>> truth_by_frame;
-  for (const TruthRow& t : truth) truth_by_frame[t.frame].push_back(&t);
   std::map<int, int> last_track;  // truth id -> track id
-  for (const TruthRow& t : truth) {
-    if (!Counts(t, truth_by_frame[t.frame], options)) continue;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (!counted[i]) continue;
+    const TruthRow& t = truth[i];
     const Eigen::Vector2d near = NearPoint(t);
     const double tolerance = std::max(0.75, 0.1 * near.norm());
     const Detection* best = nullptr;

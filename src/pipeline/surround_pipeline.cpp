@@ -109,8 +109,16 @@ void PipelineOptions::Check() const {
   side.Check();
 }
 
+namespace {
+// The options once they pass their Check() (before anything is built from them).
+const PipelineOptions& Checked(const PipelineOptions& options) {
+  options.Check();
+  return options;
+}
+}  // namespace
+
 SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& options)
-    : rig_(rig), options_((options.Check(), options)), coverage_(PipelineCoverage(rig, options)) {
+    : rig_(rig), options_(Checked(options)), coverage_(PipelineCoverage(rig, options)) {
   // Where each source looks from (the sectors' apexes), for MergeVehicleParts' see-through test.
   for (const Sector& s : coverage_.sectors) viewpoints_[s.name] = s.apex;
   front_ = std::make_unique<FrontDetector>(rig, options.front);

@@ -166,22 +166,7 @@ void ReadContents(const FieldReader& f, Scene* s) {
   }
 }
 
-}  // namespace
-
-namespace {
-Scene ParseScene(const cv::FileStorage& fs, const std::string& path);
-}  // namespace
-
-Scene ReadScene(const std::string& path) {
-  cv::FileStorage fs = internal::OpenForReading(path);
-  try {
-    return ParseScene(fs, path);
-  } catch (const cv::Exception& e) {  // an OpenCV assertion on a node of an unexpected shape
-    throw Error(Str(path, ": malformed: ", internal::OneLine(e)));
-  }
-}
-
-namespace {
+// The scene in an opened file (ReadScene turns OpenCV's assertions into errors naming it).
 Scene ParseScene(const cv::FileStorage& fs, const std::string& path) {
   const FieldReader f(fs.root(), path);
   Scene s;
@@ -244,6 +229,16 @@ Scene ParseScene(const cv::FileStorage& fs, const std::string& path) {
   }
   return s;
 }
+
 }  // namespace
+
+Scene ReadScene(const std::string& path) {
+  cv::FileStorage fs = internal::OpenForReading(path);
+  try {
+    return ParseScene(fs, path);
+  } catch (const cv::Exception& e) {  // an OpenCV assertion on a node of an unexpected shape
+    throw Error(Str(path, ": malformed: ", internal::OneLine(e)));
+  }
+}
 
 }  // namespace dps
