@@ -86,6 +86,47 @@ void TestDraws() {
   CHECK_THROWS_WITH((dps::Randomize(scene, 1, bad)), dps::Error, "field_edge_min_deg");
 }
 
+// Randomised road detail keeps each story's objects where they were: kerbs lie beyond every object
+// that starts beside the road, roadside clutter stands beyond the road's edges (and on the pavement
+// when there are kerbs), the empty roads get none; every kind of clutter and the kerbs occur.
+void TestSceneDetailDraws() {
+  std::set<std::string> kinds;
+  int kerbs = 0, clutter = 0;
+  for (const char* family : {"parked_cars", "overtaking", "empty_road"}) {
+    const dps::Scene scene = dps_test::SmallScene(family, 320, 240);
+    for (std::uint64_t seed = 0; seed < 30; ++seed) {
+      const dps::RandomizedScene r = dps::Randomize(scene, seed);
+      const dps::RoadMarkings& road = r.scene.road;
+      const double left = road.ego_lane_center_x_m - (road.lanes_left + 0.5) * road.lane_width_m;
+      const double right = road.ego_lane_center_x_m + (road.lanes_right + 0.5) * road.lane_width_m;
+      const bool kerbed = r.scene.render.kerb_height_m > 0;
+      const double kerb_left = kerbed ? r.scene.render.kerb_offset_left_m : 0.0;
+      const double kerb_right = kerbed ? r.scene.render.kerb_offset_right_m : 0.0;
+      kerbs += r.scene.render.kerb_height_m > 0;
+      CHECK(r.scene.render.kerb_height_m == 0 || (r.scene.render.kerb_height_m >= 0.08 && r.scene.render.kerb_height_m <= 0.18));
+      if (std::string(family) == "empty_road") {
+        CHECK(r.scene.objects.empty());
+        continue;
+      }
+      for (const dps::SceneObject& o : r.scene.objects) {
+        const double half = o.width_m / 2;
+        const bool is_clutter = o.id > static_cast<int>(scene.objects.size());
+        if (is_clutter) {
+          ++clutter;
+          kinds.insert(o.kind);
+          CHECK(o.start.x_m + o.width_m / 2 < left - kerb_left || o.start.x_m - o.width_m / 2 > right + kerb_right);
+        } else if (kerbed) {
+          // Story objects stay off the pavement: inside the kerbs.
+          CHECK(o.start.x_m - half > left - kerb_left && o.start.x_m + half < right + kerb_right);
+        }
+      }
+    }
+  }
+  std::printf("90 drives: %d with kerbs, %d clutter objects of %zu kinds\n", kerbs, clutter, kinds.size());
+  CHECK(kerbs > 20 && kerbs < 70);
+  CHECK_EQ(kinds.size(), size_t{3});
+}
+
 // A scene file's randomize: block sets the ranges; a bad range is an error naming the file.
 void TestRandomizeBlock() {
   const std::filesystem::path dir = dps_test::ScratchDir("dps_test_randomize_block");
@@ -168,6 +209,7 @@ void TestSubset() {
 
 int main() {
   TestDraws();
+  TestSceneDetailDraws();
   TestRandomizeBlock();
   TestLossyVideo();
   TestSubset();

@@ -15,6 +15,7 @@
 #include "check.h"
 #include "fixtures.h"
 #include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
 #include "dps/synth/synth.h"
 #include "dps/util/csv.h"
 #include "dps/util/error.h"
@@ -290,6 +291,75 @@ void TestBadScenes() {
   }
 }
 
+// Scene detail's geometry, against where it was placed: the kerb's face and the raised pavement
+// beyond it, the road short of it; the body's sill and a mirror housing behind each camera.
+void TestSceneDetail() {
+  dps::Scene s = Load("empty_road");
+  s.render.kerb_height_m = 0.15;
+  s.render.kerb_offset_left_m = 0.4;
+  s.render.kerb_offset_right_m = 0.4;
+  s.render.own_sill_height_m = 0.3;
+  s.render.own_sill_inset_m = 0.1;
+  s.render.mirror_housing_m = 0.2;
+  s.render.mirror_housing_drop_m = 0.05;
+  const dps::SceneRenderer renderer(s);
+  const dps::FrameState st = renderer.StateAt(0.0);
+  const double kerb_x = s.road.ego_lane_center_x_m + (s.road.lanes_right + 0.5) * s.road.lane_width_m + 0.4;
+  const Eigen::Vector3d eye(0.0, -1.2, 3.0);  // in front of the own car
+  const auto cast = [&](const Eigen::Vector3d& from, const Eigen::Vector3d& towards) {
+    return renderer.Cast(st, from, (towards - from).normalized());
+  };
+  const dps::RayHit pavement = cast(eye, {kerb_x + 1.0, -0.15, 9.0});
+  CHECK_EQ(pavement.id, std::uint16_t{dps::kIdKerb});
+  CHECK_NEAR(pavement.point_vehicle.y(), -0.15, 1e-9);
+  CHECK_NEAR(pavement.point_vehicle.x(), kerb_x + 1.0, 1e-9);
+  const dps::RayHit face = cast(eye, {kerb_x, -0.07, 9.0});
+  CHECK_EQ(face.id, std::uint16_t{dps::kIdKerb});
+  CHECK_NEAR(face.point_vehicle.x(), kerb_x, 1e-9);
+  const dps::RayHit road = cast(eye, {kerb_x - 0.3, 0.0, 9.0});
+  CHECK_EQ(road.id, std::uint16_t{dps::kIdGround});
+  CHECK_NEAR(road.point_vehicle.y(), 0.0, 1e-9);
+  // Left of the road too, and below the pavement's level behind the kerb nothing is ground.
+  const double left_kerb = s.road.ego_lane_center_x_m - (s.road.lanes_left + 0.5) * s.road.lane_width_m - 0.4;
+  CHECK_EQ(cast(eye, {left_kerb - 2.0, 0.0, 8.0}).id, std::uint16_t{dps::kIdKerb});
+  // The body's side under the doors is set in by the sill inset; above the sill it is the body.
+  const double hw = s.rig.vehicle.width_m / 2;
+  const dps::RayHit low = renderer.Cast(st, {hw + 1.0, -0.15, 0.0}, {-1.0, 0.0, 0.0});
+  CHECK_EQ(low.id, std::uint16_t{dps::kIdOwnCar});
+  CHECK_NEAR(low.point_vehicle.x(), hw - 0.1, 1e-9);
+  const dps::RayHit door = renderer.Cast(st, {hw + 1.0, -0.5, 0.0}, {-1.0, 0.0, 0.0});
+  CHECK_NEAR(door.point_vehicle.x(), hw, 1e-9);
+  // Straight back from each camera: its housing, 4 cm behind it.
+  for (const dps::RigCamera& c : s.rig.cameras) {
+    const dps::RayHit back = renderer.Cast(st, c.vehicle_from_camera.t, {0.0, 0.0, -1.0});
+    CHECK_EQ(back.id, std::uint16_t{dps::kIdOwnCar});
+    CHECK_NEAR(back.distance_m, 0.04, 1e-9);
+  }
+  // Without the detail (the shipped look) the same rays meet the road and the open air.
+  dps::Scene plain = Load("empty_road");
+  const dps::SceneRenderer plain_renderer(plain);
+  const dps::FrameState plain_st = plain_renderer.StateAt(0.0);
+  CHECK_EQ(plain_renderer.Cast(plain_st, eye, (Eigen::Vector3d(kerb_x + 1.0, 0.0, 9.0) - eye).normalized()).id,
+           std::uint16_t{dps::kIdGround});
+  CHECK(plain_renderer.Cast(plain_st, s.rig.cameras[0].vehicle_from_camera.t, {0.0, 0.0, -1.0}).id != dps::kIdOwnCar);
+  // Patches and cracks change the road's look, not its geometry.
+  dps::Scene worn = plain;
+  worn.render.ground_patches = 1.0;
+  worn.render.cracks = 1.0;
+  const dps::SceneRenderer worn_renderer(worn);
+  const dps::RenderedView a = plain_renderer.Render(plain_st, 0, 0), b = worn_renderer.Render(worn_renderer.StateAt(0.0), 0, 0);
+  CHECK(cv::norm(a.ids, b.ids, cv::NORM_INF) == 0.0);
+  cv::Mat diff;
+  cv::absdiff(a.image, b.image, diff);
+  std::vector<cv::Mat> channels;
+  cv::split(diff, channels);
+  const cv::Mat ground = a.ids == dps::kIdGround;
+  const cv::Mat changed_pixels = ((channels[0] | channels[1] | channels[2]) > 0) & ground;
+  const double changed = cv::countNonZero(changed_pixels);
+  std::printf("patches and cracks: %.0f of %d road pixels changed\n", changed, cv::countNonZero(ground));
+  CHECK(changed > 0.3 * cv::countNonZero(ground));
+}
+
 }  // namespace
 
 int main() {
@@ -308,6 +378,7 @@ int main() {
   TestCalibrationMarks();
   TestRangeImagesAndDeterminism();
   TestBadScenes();
+  TestSceneDetail();
   fs::remove_all(kTmp);
   return dps_test::Report();
 }

@@ -227,6 +227,81 @@ void DrawObjects(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
   }
 }
 
+// The road's outer edges (world x of the outer markings' centres); +-5 m without markings.
+std::pair<double, double> RoadEdges(const RoadMarkings& r) {
+  if (!r.enabled) return {-5.0, 5.0};
+  return {r.ego_lane_center_x_m - (r.lanes_left + 0.5) * r.lane_width_m,
+          r.ego_lane_center_x_m + (r.lanes_right + 0.5) * r.lane_width_m};
+}
+
+// Road detail and the own car's shape: repair patches, cracks, a gravel verge, kerbs (beyond every
+// object that starts beside the road, so that parked cars stay on the road's level), the sills and
+// the mirror housings. Drawn after everything else so that the earlier draws stay as they were.
+void DrawDetail(RandomizedScene* r, Draws* d) {
+  RenderOptions& render = r->scene.render;
+  render.own_sill_height_m = std::min(render.own_body_height_m, d->Uniform(0.2, 0.4, "render.own_sill_height_m"));
+  render.own_sill_inset_m = d->Uniform(0.03, 0.12, "render.own_sill_inset_m");
+  render.mirror_housing_m = d->Uniform(0.1, 0.25, "render.mirror_housing_m");
+  render.mirror_housing_drop_m = d->Uniform(0.0, 0.06, "render.mirror_housing_drop_m");
+  render.ground_patches = d->Chance(0.5) ? d->Uniform(0.1, 0.4, "render.ground_patches") : 0.0;
+  render.cracks = d->Chance(0.5) ? d->Uniform(0.1, 0.5, "render.cracks") : 0.0;
+  render.gravel_verge = d->Chance(0.5);
+  d->Record("render.gravel_verge", render.gravel_verge);
+  if (!d->Chance(0.5) || !r->scene.road.enabled) return;
+  render.kerb_height_m = d->Uniform(0.08, 0.18, "render.kerb_height_m");
+  double& on_left = render.kerb_offset_left_m;
+  double& on_right = render.kerb_offset_right_m;
+  on_left = d->Uniform(0.2, 1.0);
+  on_right = d->Uniform(0.2, 1.0);
+  const auto [left, right] = RoadEdges(r->scene.road);
+  for (const SceneObject& obj : r->scene.objects) {
+    const double reach = std::hypot(obj.length_m, obj.width_m) / 2 + 0.3;
+    if (obj.start.x_m < left) on_left = std::max(on_left, left - obj.start.x_m + reach);
+    if (obj.start.x_m > right) on_right = std::max(on_right, obj.start.x_m - right + reach);
+  }
+  d->Record("render.kerb_offset_left_m", on_left);
+  d->Record("render.kerb_offset_right_m", on_right);
+}
+
+// Roadside clutter beside a story with objects: up to three poles, walls or pedestrians beyond the
+// road's edges (and its kerbs), along the stretch the ego drives; pedestrians walk along the road.
+void DrawClutter(RandomizedScene* r, Draws* d) {
+  Scene& s = r->scene;
+  const int count = d->Index(4);
+  d->Record("clutter.count", count);
+  if (s.objects.empty()) return;  // the empty roads stay empty
+  int next_id = 1;
+  for (const SceneObject& obj : s.objects) next_id = std::max(next_id, obj.id + 1);
+  const auto [left, right] = RoadEdges(s.road);
+  const double travelled = s.EgoPoseAt(s.duration_s).z_m;
+  for (int k = 0; k < count; ++k) {
+    SceneObject obj;
+    obj.id = next_id++;
+    const std::string name = "clutter" + std::to_string(obj.id);
+    const int kind = d->Index(3);
+    d->Record(name + ".kind", kind);  // 0 pole, 1 wall, 2 pedestrian
+    obj.kind = kind == 0 ? "pole" : kind == 1 ? "wall" : "pedestrian";
+    obj.length_m = kind == 0 ? 0.2 : kind == 1 ? d->Uniform(3.0, 12.0, name + ".length_m") : 0.5;
+    obj.width_m = kind == 0 ? 0.2 : kind == 1 ? 0.3 : 0.6;
+    obj.height_m = kind == 0 ? d->Uniform(2.5, 4.0, name + ".height_m")
+                             : kind == 1 ? d->Uniform(1.0, 2.5, name + ".height_m") : d->Uniform(1.5, 1.9, name + ".height_m");
+    const bool on_left = d->Chance(0.5);
+    const double kerb =
+        s.render.kerb_height_m > 0.0 ? (on_left ? s.render.kerb_offset_left_m : s.render.kerb_offset_right_m) : 0.0;
+    const double out = kerb + obj.width_m / 2 +
+                       d->Uniform(0.3, 2.5, name + ".beyond_edge_m");
+    obj.start.x_m = on_left ? left - out : right + out;
+    obj.start.z_m = d->Uniform(-15.0, std::max(0.0, travelled) + 30.0, name + ".z_m");
+    obj.brightness = d->Uniform(0.2, 1.0, name + ".brightness");
+    obj.colour = d->Index(8);
+    if (kind == 2) {
+      obj.start.heading_rad = d->Chance(0.5) ? 0.0 : kPi;
+      obj.motion = MotionProfile({MotionSample{0.0, d->Uniform(0.0, 1.5, name + ".speed_mps"), 0.0}});
+    }
+    s.objects.push_back(obj);
+  }
+}
+
 }  // namespace
 
 void RandomizeOptions::Check() const {
@@ -311,6 +386,8 @@ RandomizedScene Randomize(const Scene& scene, std::uint64_t seed, const Randomiz
   DrawRig(options, &r, &d);
   DrawAppearance(options, &r, &d);
   DrawObjects(options, &r, &d);
+  DrawDetail(&r, &d);
+  DrawClutter(&r, &d);
   return r;
 }
 

@@ -212,8 +212,20 @@ Scene ParseScene(const cv::FileStorage& fs, const std::string& path) {
     s.render.clouds = NonNegative(r, "clouds", s.render.clouds);
     s.render.sun_glare = NonNegative(r, "sun_glare", s.render.sun_glare);
     s.render.verge_m = NonNegative(r, "verge", s.render.verge_m);
+    s.render.gravel_verge = r.IntegerOr("gravel_verge", s.render.gravel_verge ? 1 : 0) != 0;
+    s.render.ground_patches = NonNegative(r, "ground_patches", s.render.ground_patches);
+    s.render.cracks = NonNegative(r, "cracks", s.render.cracks);
+    s.render.kerb_height_m = NonNegative(r, "kerb_height", s.render.kerb_height_m);
+    s.render.kerb_offset_left_m = NonNegative(r, "kerb_offset_left", s.render.kerb_offset_left_m);
+    s.render.kerb_offset_right_m = NonNegative(r, "kerb_offset_right", s.render.kerb_offset_right_m);
+    s.render.own_sill_height_m = NonNegative(r, "own_sill_height", s.render.own_sill_height_m);
+    if (s.render.own_sill_height_m > s.render.own_body_height_m) r.Fail("own_sill_height", "expected <= own_body_height");
+    s.render.own_sill_inset_m = NonNegative(r, "own_sill_inset", s.render.own_sill_inset_m);
+    s.render.mirror_housing_m = NonNegative(r, "mirror_housing", s.render.mirror_housing_m);
+    s.render.mirror_housing_drop_m = NonNegative(r, "mirror_housing_drop", s.render.mirror_housing_drop_m);
     for (const auto& [key, value] : {std::pair{"marking_wear", s.render.marking_wear}, std::pair{"clouds", s.render.clouds},
-                                     std::pair{"sun_glare", s.render.sun_glare}}) {
+                                     std::pair{"sun_glare", s.render.sun_glare}, std::pair{"ground_patches", s.render.ground_patches},
+                                     std::pair{"cracks", s.render.cracks}}) {
       if (value > 1) r.Fail(key, "expected 0..1");
     }
   }

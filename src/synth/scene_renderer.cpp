@@ -15,6 +15,11 @@ namespace {
 constexpr double kOwnCabinRearFraction = -0.40;  // cabin from -0.40 L to +0.12 L along Z
 constexpr double kOwnCabinFrontFraction = 0.12;
 constexpr double kOwnCabinInsetM = 0.1;          // narrower than the body on each side
+// A mirror housing: behind its camera by this gap, this high above it, and this far beyond it
+// outwards.
+constexpr double kHousingGapM = 0.04;
+constexpr double kHousingHeightM = 0.15;
+constexpr double kHousingMarginM = 0.03;
 constexpr double kTwoPi = 6.28318530717958647692;
 
 // Integer hash (lowbias32 by C. Wellons) of up to three integers and a seed.
@@ -86,6 +91,28 @@ double SlabEntry(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen
 }  // namespace
 
 SceneRenderer::SceneRenderer(const Scene& scene) : scene_(scene) {
+  // The own car: the body (narrower below the sill when one is drawn), the cabin, and a mirror
+  // housing behind each camera reaching from the body's side to just outside the camera.
+  const RenderOptions& render = scene.render;
+  const Vehicle& car = scene.rig.vehicle;
+  const double hw = car.width_m / 2, hl = car.length_m / 2;
+  const double sill = std::clamp(render.own_sill_height_m, 0.0, render.own_body_height_m);
+  own_boxes_.push_back({{-hw, -render.own_body_height_m, -hl}, {hw, -sill, hl}});
+  own_boxes_.push_back({{-hw + kOwnCabinInsetM, -render.own_cabin_height_m, kOwnCabinRearFraction * car.length_m},
+                        {hw - kOwnCabinInsetM, 0.0, kOwnCabinFrontFraction * car.length_m}});
+  if (sill > 0.0) {
+    const double inset = std::min(render.own_sill_inset_m, hw / 2);
+    own_boxes_.push_back({{-hw + inset, -sill, -hl}, {hw - inset, 0.0, hl}});
+  }
+  if (render.mirror_housing_m > 0.0) {
+    for (const RigCamera& cam : scene.rig.cameras) {
+      const Eigen::Vector3d& c = cam.vehicle_from_camera.t;
+      const double side = c.x() < 0 ? -1.0 : 1.0;
+      const double inner = side * std::min(hw, std::abs(c.x()) - 0.05), outer = c.x() + side * kHousingMarginM;
+      own_boxes_.push_back({{std::min(inner, outer), c.y() - kHousingHeightM, c.z() - kHousingGapM - render.mirror_housing_m},
+                            {std::max(inner, outer), c.y() + render.mirror_housing_drop_m, c.z() - kHousingGapM}});
+    }
+  }
   const int ss = scene.render.supersample;
   samples_ = ss * ss;
   for (const RigCamera& cam : scene.rig.cameras) {
@@ -141,15 +168,17 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
     best_t = -o.y() / d.y();
     best.id = kIdGround;
   }
-  // The own car, fixed in the vehicle frame.
-  const Vehicle& car = scene_.rig.vehicle;
   int axis = 0;
-  const double hw = car.width_m / 2, hl = car.length_m / 2;
-  const double t_car = std::min(
-      SlabEntry(o, d, {-hw, -scene_.render.own_body_height_m, -hl}, {hw, 0.0, hl}, &axis),
-      SlabEntry(o, d,
-                {-hw + kOwnCabinInsetM, -scene_.render.own_cabin_height_m, kOwnCabinRearFraction * car.length_m},
-                {hw - kOwnCabinInsetM, 0.0, kOwnCabinFrontFraction * car.length_m}, &axis));
+  if (scene_.render.kerb_height_m > 0.0 && scene_.road.enabled) {
+    const double t_kerb = KerbEntry(st, o, d, &axis);
+    if (t_kerb < best_t) {
+      best_t = t_kerb;
+      best.id = kIdKerb;
+      best.face = axis == 1 ? 2 : 0;
+    }
+  }
+  // The own car, fixed in the vehicle frame.
+  const double t_car = OwnCarEntry(o, d);
   if (t_car < best_t) {
     best_t = t_car;
     best.id = kIdOwnCar;
@@ -181,6 +210,7 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
   }
   best.distance_m = best_t;
   best.point_vehicle = o + best_t * d;
+  if (best.id == kIdKerb) best.point_world = st.world_from_vehicle.Apply(best.point_vehicle);
   if (best.id == kIdGround) {
     // Paint or asphalt: decided in world coordinates.
     best.point_world = st.world_from_vehicle.Apply(best.point_vehicle);
@@ -241,10 +271,7 @@ bool SceneRenderer::InShadow(const FrameState& st, const Eigen::Vector3d& p, con
   const Vehicle& car = scene_.rig.vehicle;
   const double hw = car.width_m / 2, hl = car.length_m / 2;
   if (std::hypot(p.x(), p.z()) <= std::hypot(hw, hl) + reach * scene_.render.own_cabin_height_m &&
-      std::isfinite(std::min(
-          SlabEntry(o, light, {-hw, -scene_.render.own_body_height_m, -hl}, {hw, 0.0, hl}, &axis),
-          SlabEntry(o, light, {-hw + kOwnCabinInsetM, -scene_.render.own_cabin_height_m, kOwnCabinRearFraction * car.length_m},
-                    {hw - kOwnCabinInsetM, 0.0, kOwnCabinFrontFraction * car.length_m}, &axis)))) {
+      std::isfinite(OwnCarEntry(o, light))) {
     return true;
   }
   for (const BoxInstance& b : st.boxes) {
@@ -261,6 +288,71 @@ bool SceneRenderer::InShadow(const FrameState& st, const Eigen::Vector3d& p, con
     }
   }
   return false;
+}
+
+double SceneRenderer::OwnCarEntry(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
+  int axis = 0;
+  double t = std::numeric_limits<double>::infinity();
+  for (const auto& [lo, hi] : own_boxes_) t = std::min(t, SlabEntry(o, d, lo, hi, &axis));
+  return t;
+}
+
+double SceneRenderer::KerbEntry(const FrameState& st, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                int* face) const {
+  // The pavement beyond each outer edge is a slab kerb_height_m high, unbounded along the road.
+  const RoadMarkings& r = scene_.road;
+  const Eigen::Vector3d ow = st.world_from_vehicle.Apply(o), dw = st.world_from_vehicle.R * d;
+  const double h = scene_.render.kerb_height_m, far = 1e7;
+  const double left = r.ego_lane_center_x_m - (r.lanes_left + 0.5) * r.lane_width_m - scene_.render.kerb_offset_left_m;
+  const double right = r.ego_lane_center_x_m + (r.lanes_right + 0.5) * r.lane_width_m + scene_.render.kerb_offset_right_m;
+  int axis_left = 0, axis_right = 0;
+  const double t_left = SlabEntry(ow, dw, {-far, -h, -far}, {left, 0.0, far}, &axis_left);
+  const double t_right = SlabEntry(ow, dw, {right, -h, -far}, {far, 0.0, far}, &axis_right);
+  *face = t_left <= t_right ? axis_left : axis_right;
+  return std::min(t_left, t_right);
+}
+
+cv::Vec3f SceneRenderer::GroundColour(const Eigen::Vector3d& w, bool pavement, std::uint32_t seed) const {
+  const RenderOptions& render = scene_.render;
+  const double k = render.texture_scale, c = render.ground_contrast;
+  const double n = Fbm(w.x(), w.z(), 0.8 * k, 4, seed + 11);
+  // Asphalt: patches at 0.8 m, and aggregate at 0.25 m and 0.06 m that correlation stereo can
+  // lock on to (real asphalt is textured down to the pixel).
+  const double mid = Fbm(w.x(), w.z(), 0.25 * k, 2, seed + 23);
+  const double grain = Fbm(w.x(), w.z(), 0.06 * k, 2, seed + 37);
+  if (render.verge_m > 0.0 && scene_.road.enabled && OnVerge(w.x())) {
+    if (!render.gravel_verge) {
+      return cv::Vec3f(0.16f, 0.34f, 0.26f) * static_cast<float>(0.7 + 0.6 * mid + 0.3 * (grain - 0.5));
+    }
+    const double stones = Fbm(w.x(), w.z(), 0.03, 2, seed + 41);
+    return cv::Vec3f(0.40f, 0.43f, 0.46f) * static_cast<float>(0.75 + 0.3 * (mid - 0.5) + 0.8 * (stones - 0.5));
+  }
+  if (pavement) {
+    // Paving slabs of 0.6 m with darker joints.
+    const double jx = std::fmod(std::abs(w.x()), 0.6), jz = std::fmod(std::abs(w.z()), 0.6);
+    const bool joint = jx < 0.02 || jz < 0.02;
+    const float g = static_cast<float>((joint ? 0.28 : 0.48) + c * 0.10 * (mid - 0.5) + c * 0.08 * (grain - 0.5));
+    return cv::Vec3f(g, g * 1.02f, g * 1.04f);
+  }
+  double tone = 0.30 * render.ground_brightness + c * 0.14 * (n - 0.5) + c * 0.16 * (mid - 0.5) + c * 0.14 * (grain - 0.5);
+  if (render.ground_patches > 0.0) {
+    // Repair patches: a rectangle inside some cells of a 3 m x 5 m grid, their own shade, smoother.
+    const double cx = std::floor(w.x() / 3.0), cz = std::floor(w.z() / 5.0);
+    const std::uint32_t cell = Hash(static_cast<std::int64_t>(cx), static_cast<std::int64_t>(cz), seed + 59);
+    if (Unit(cell) < render.ground_patches) {
+      const double inset_x = 0.2 + 0.6 * Unit(Hash(cell + 1)), inset_z = 0.3 + 1.2 * Unit(Hash(cell + 2));
+      const double u = w.x() - cx * 3.0, v = w.z() - cz * 5.0;
+      if (u > inset_x && u < 3.0 - inset_x && v > inset_z && v < 5.0 - inset_z) {
+        tone = 0.30 * render.ground_brightness * (0.7 + 0.6 * Unit(Hash(cell + 3))) + c * 0.10 * (grain - 0.5);
+      }
+    }
+  }
+  if (render.cracks > 0.0 && Fbm(w.x(), w.z(), 4.0, 1, seed + 97) < render.cracks &&
+      std::abs(Fbm(w.x(), w.z(), 1.2, 3, seed + 91) - 0.5) < 0.006) {
+    tone *= 0.5;  // a crack about 1.5 cm wide along a line of the noise
+  }
+  const float g = static_cast<float>(tone);
+  return cv::Vec3f(g, g * 1.01f, g * 1.03f);
 }
 
 bool SceneRenderer::OnVerge(double world_x) const {
@@ -306,25 +398,24 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
     case kIdGround:
     case kIdPaint: {
       const Eigen::Vector3d& w = hit.point_world;
-      const double k = render.texture_scale;
-      const double n = Fbm(w.x(), w.z(), 0.8 * k, 4, seed + 11);
       if (hit.id == kIdPaint) {
+        const double n = Fbm(w.x(), w.z(), 0.8 * render.texture_scale, 4, seed + 11);
         const cv::Vec3f paint = cv::Vec3f::all(static_cast<float>(0.78 + 0.12 * n));
         return render.shadows && InShadow(st, hit.point_vehicle, light) ? paint * 0.5f : paint;
       }
-      // Asphalt: patches at 0.8 m, and aggregate at 0.25 m and 0.06 m that correlation stereo
-      // can lock on to (real asphalt is textured down to the pixel).
-      const double mid = Fbm(w.x(), w.z(), 0.25 * k, 2, seed + 23);
-      const double grain = Fbm(w.x(), w.z(), 0.06 * k, 2, seed + 37);
-      const double c = render.ground_contrast;
-      const float g = static_cast<float>(0.30 * render.ground_brightness + c * 0.14 * (n - 0.5) +
-                                         c * 0.16 * (mid - 0.5) + c * 0.14 * (grain - 0.5));
-      cv::Vec3f ground(g, g * 1.01f, g * 1.03f);
-      if (render.verge_m > 0.0 && scene_.road.enabled && OnVerge(w.x())) {
-        ground = cv::Vec3f(0.16f, 0.34f, 0.26f) * static_cast<float>(0.7 + 0.6 * mid + 0.3 * (grain - 0.5));
-      }
+      cv::Vec3f ground = GroundColour(w, false, seed);
       if (render.shadows && InShadow(st, hit.point_vehicle, light)) ground *= 0.5f;
       return ground;
+    }
+    case kIdKerb: {
+      if (hit.face == 2) {
+        cv::Vec3f top = GroundColour(hit.point_world, true, seed);
+        return render.shadows && InShadow(st, hit.point_vehicle, light) ? top * 0.5f : top;
+      }
+      // The kerb's face: light concrete, lit from above at a slant.
+      const Eigen::Vector3d& w = hit.point_world;
+      const double n = Fbm(w.z(), w.y(), 0.05, 2, seed + 43);
+      return cv::Vec3f::all(static_cast<float>(0.55 + 0.2 * (n - 0.5)));
     }
     default: break;
   }

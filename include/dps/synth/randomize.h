@@ -14,12 +14,14 @@
 // - the calibration error: the rig written for processing is the rendering rig with each camera
 //   turned by a further small rotation;
 // - the appearance: sky and asphalt brightness, the asphalt texture's contrast and grain size,
-//   shadows, worn markings, clouds, sun glare, grass verges, exposure, vignetting, sensor noise,
-//   blur, the texture seed, and whether the drive is written as video (MJPG or H.264) instead of
-//   PNG images;
-// - the own car as the cameras see it: bonnet and cabin height, paint;
+//   shadows, worn markings, clouds, sun glare, grass or gravel verges, repair patches, cracks,
+//   kerbs with a raised pavement, exposure, vignetting, sensor noise, blur, the texture seed, and
+//   whether the drive is written as video (MJPG or H.264) instead of PNG images;
+// - the own car as the cameras see it: bonnet and cabin height, the sill under the doors, a mirror
+//   housing behind each camera, paint;
 // - the objects: cars of the story may become vans, buses or motorbikes; sizes, paint brightness
-//   and colour, positions and speeds around the scene's own;
+//   and colour, positions and speeds around the scene's own; up to three poles, walls or walking
+//   pedestrians beside the road (not on the empty roads);
 //   and the whole story mirrored left to right (overtaking on either side, turns both ways).
 #pragma once
 

@@ -69,12 +69,23 @@ struct RenderOptions {
   double own_body_height_m = 0.8;    // > 0
   double own_cabin_height_m = 1.45;  // >= own_body_height_m
   double own_car_brightness = 1.0;   // factor on its dark grey, > 0
+  // Its shape below the doors and at the mirrors (0: none, the shipped look).
+  double own_sill_height_m = 0.0;    // below this height the body is narrower, 0..own_body_height_m
+  double own_sill_inset_m = 0.0;     // by this much on each side (the road shows under the doors), >= 0
+  double mirror_housing_m = 0.0;     // each camera's mirror housing: this deep behind the camera (0 = none)
+  double mirror_housing_drop_m = 0.0;  // how far the housing reaches below the camera, >= 0
   // Scene detail (0 / false: none, the shipped look).
   bool shadows = false;           // objects and the own car cast shadows from the sun on the ground
   double marking_wear = 0.0;      // fraction of lane markings worn away, 0..1
   double clouds = 0.0;            // cloud cover of the sky, 0..1
   double sun_glare = 0.0;         // brightness of the halo around the sun, 0..1
   double verge_m = 0.0;           // grass beyond the road's outer edges from this far out, m (0 = asphalt)
+  bool gravel_verge = false;      // the verge is gravel instead of grass
+  double ground_patches = 0.0;    // share of the road's 3 m x 5 m cells holding a repair patch, 0..1
+  double cracks = 0.0;            // share of the road crossed by cracks, 0..1
+  double kerb_height_m = 0.0;     // kerbs along the road's outer edges, raised pavement beyond (0 = none)
+  double kerb_offset_left_m = 0.3;   // each kerb this far beyond its outer edge marking's centre, >= 0
+  double kerb_offset_right_m = 0.3;
 };
 
 // Calibration-scene settings (kind == kCalibration).

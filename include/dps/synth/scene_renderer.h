@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -25,6 +26,7 @@ enum SurfaceId : std::uint16_t {
   kIdGround = 2,         // asphalt
   kIdPaint = 3,          // lane markings, painted parking lines
   kIdOwnCar = 4,         // the vehicle that carries the rig
+  kIdKerb = 5,           // a kerb's face and the raised pavement beyond it
   kIdObjectBase = 1000,  // object with truth id k has id kIdObjectBase + k
 };
 
@@ -87,6 +89,12 @@ class SceneRenderer {
   // road's outer edges; clouds and the sun's halo on a sky colour.
   bool InShadow(const FrameState& st, const Eigen::Vector3d& ground_point, const Eigen::Vector3d& light) const;
   bool OnVerge(double world_x) const;
+  // The first entry of a ray into the own car's boxes (+inf: none).
+  double OwnCarEntry(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
+  // The first entry into a kerb and its pavement (+inf: none); `face` = entry axis (1: top).
+  double KerbEntry(const FrameState& st, const Eigen::Vector3d& o, const Eigen::Vector3d& d, int* face) const;
+  // Asphalt (with patches and cracks), a verge or pavement at a world point on the road's surface.
+  cv::Vec3f GroundColour(const Eigen::Vector3d& world, bool pavement, std::uint32_t seed) const;
   cv::Vec3f SkyDetail(const RenderOptions& render, const Eigen::Vector3d& d, const Eigen::Vector3d& light,
                       float elevation, std::uint32_t seed, cv::Vec3f sky) const;
   struct CameraRays {
@@ -97,6 +105,7 @@ class SceneRenderer {
                   const Eigen::Vector3d& light_vehicle) const;
 
   const Scene& scene_;
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> own_boxes_;  // [lo, hi], vehicle frame
   std::vector<CameraRays> rays_;
   int samples_ = 4;
 };
