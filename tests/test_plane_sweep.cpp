@@ -123,6 +123,39 @@ void TestParkedCars() {
   // the window straddles the car, is called obstacle; printed, not asserted.
 }
 
+// Two earlier frames at once (33 and 31 against 36): the distances behind the car hold; and a
+// region limits the work to its pixels without changing what they get.
+void TestSeveralFramesAndRegion() {
+  const dps::Scene scene = dps_test::SmallScene("parked_cars", 320, 240);
+  const size_t right = scene.rig.cameras[0].name == "right" ? 0 : 1;
+  const dps::RigCamera& cam = scene.rig.cameras[right];
+  const dps::SceneRenderer renderer(scene);
+  const dps::FrameState now = renderer.StateAt(scene.FrameTime(36));
+  std::vector<dps::EarlierFrame> earlier;
+  for (const int k : {33, 31}) {
+    const dps::FrameState st = renderer.StateAt(scene.FrameTime(k));
+    earlier.push_back({dps::GreyImage(renderer.Render(st, right, k).image),
+                       st.world_from_vehicle.Inverse() * now.world_from_vehicle});
+  }
+  Frames f;
+  f.truth = renderer.Render(now, right, 36);
+  const cv::Mat current = dps::GreyImage(f.truth.image);
+  f.sweep = dps::PlaneSweeper(cam.model, cam.vehicle_from_camera, cv::Mat(), cv::Mat()).Sweep(earlier, current);
+  const Scores rear = Score(f, scene, right, 12.0, -100.0, -scene.rig.vehicle.length_m / 2);
+  std::printf("frame 36 against 33 and 31\n");
+  Report("  behind", rear);
+  CHECK(rear.objects > 300);
+  CHECK(Median(rear.errors) <= kMaxMedianDistanceError);
+  // The left half of the image only: the same labels there, nothing elsewhere.
+  cv::Mat region(current.size(), CV_8U, cv::Scalar(0));
+  region(cv::Rect(0, 0, current.cols / 2, current.rows)).setTo(255);
+  const dps::SweepResult part =
+      dps::PlaneSweeper(cam.model, cam.vehicle_from_camera, cv::Mat(), region).Sweep(earlier, current);
+  const cv::Mat outside = region == 0;
+  CHECK_EQ(cv::countNonZero((part.label != dps::kSweepNoRay) & outside), 0);
+  CHECK_EQ(cv::countNonZero((part.label != f.sweep.label) & region), 0);
+}
+
 void TestBadInputs() {
   const dps::Scene scene = dps_test::SmallScene("parked_cars", 320, 240);
   const dps::RigCamera& cam = scene.rig.cameras[0];
@@ -139,6 +172,7 @@ void TestBadInputs() {
 
 int main() {
   TestParkedCars();
+  TestSeveralFramesAndRegion();
   TestBadInputs();
   return dps_test::Report();
 }

@@ -1,5 +1,6 @@
 #include "dps/stereo/plane_sweep.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -15,40 +16,16 @@ namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr double kSameSurfacePx = 1.5;  // warps this close together are the same surface
 
-// Every pixel's ray in the vehicle frame (NaN where the model has none or the mask says so) and
-// its distance to the road plane (+inf above the horizon).
+// The rays of the pixels of the region's bounding box (vehicle frame; NaN where the pixel sees
+// nothing) and their distances to the road plane (+inf above the horizon).
 struct Rays {
   cv::Mat dirs;    // CV_32FC3
   cv::Mat road_m;  // CV_32F
 };
 
-Rays PixelRays(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& valid) {
-  Rays r;
-  r.dirs.create(model.height(), model.width(), CV_32FC3);
-  r.road_m.create(model.height(), model.width(), CV_32F);
-  const Eigen::Vector3d& o = vehicle_from_camera.t;
-  cv::parallel_for_(cv::Range(0, model.height()), [&](const cv::Range& rows) {
-    for (int v = rows.start; v < rows.end; ++v) {
-      for (int u = 0; u < model.width(); ++u) {
-        Eigen::Vector3d ray;
-        cv::Vec3f& dir = r.dirs.at<cv::Vec3f>(v, u);
-        float& road = r.road_m.at<float>(v, u);
-        if ((!valid.empty() && valid.at<std::uint8_t>(v, u) == 0) || !model.Unproject({u, v}, &ray)) {
-          dir = cv::Vec3f(kNaN, kNaN, kNaN);
-          road = kNaN;
-          continue;
-        }
-        const Eigen::Vector3d d = vehicle_from_camera.R * ray;
-        dir = cv::Vec3f(static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z()));
-        road = d.y() > 1e-6 && o.y() < 0 ? static_cast<float>(-o.y() / d.y()) : std::numeric_limits<float>::infinity();
-      }
-    }
-  });
-  return r;
-}
-
-// Where each current pixel lands in the earlier image if it lies at `distance_m` along its ray
-// (distance < 0: on the road). (-1, -1) where it leaves the earlier image or its valid pixels.
+// Where each current pixel (of the box) lands in the earlier image if it lies at `distance_m`
+// along its ray (distance < 0: on the road). (-1, -1) where it leaves the earlier image or its
+// valid pixels.
 cv::Mat WarpMap(const CameraModel& model, const Pose& vehicle_from_camera, const Pose& previous_from_current,
                 const Rays& rays, const cv::Mat& valid, double distance_m) {
   const Pose camera_from_previous = vehicle_from_camera.Inverse() * previous_from_current;
@@ -66,7 +43,7 @@ cv::Mat WarpMap(const CameraModel& model, const Pose& vehicle_from_camera, const
         Eigen::Vector2d px;
         if (!model.Project(camera_from_previous.Apply(p), &px)) continue;
         const int pu = static_cast<int>(std::lround(px.x())), pv = static_cast<int>(std::lround(px.y()));
-        if (pu < 0 || pv < 0 || pu >= map.cols || pv >= map.rows) continue;
+        if (pu < 0 || pv < 0 || pu >= model.width() || pv >= model.height()) continue;
         if (!valid.empty() && valid.at<std::uint8_t>(pv, pu) == 0) continue;
         out = cv::Vec2f(static_cast<float>(px.x()), static_cast<float>(px.y()));
       }
@@ -111,7 +88,7 @@ struct Reference {
   cv::Mat image, mean, variance, inside;  // CV_32F; inside: the window's share of valid pixels
 };
 
-Reference MakeReference(const cv::Mat& current, const Rays& rays, int window) {
+Reference MakeReference(const cv::Mat& current, const Rays& rays, int window) {  // current: the box
   Reference r;
   current.convertTo(r.image, CV_32F);
   r.mean = Mean(r.image, window);
@@ -154,6 +131,7 @@ cv::Mat Zncc(const Reference& ref, const cv::Mat& previous, const cv::Mat& map, 
 // The surface a pixel's best score says, with the uniqueness test against surfaces that warp it
 // elsewhere; the label and distance follow.
 struct PixelChoice {
+  const cv::Mat& measured;             // the region's pixels
   const std::vector<cv::Mat>& scores;  // per hypothesis; the last is the road
   const std::vector<cv::Mat>& maps;
   const std::vector<double>& distances;
@@ -165,7 +143,7 @@ void Choose(const PixelChoice& c, const Rays& rays, const Reference& ref, int u,
   const int n = static_cast<int>(c.scores.size());
   float& distance = out->distance_m.at<float>(v, u);
   std::uint8_t& label = out->label.at<std::uint8_t>(v, u);
-  if (std::isnan(rays.dirs.at<cv::Vec3f>(v, u)[0])) {
+  if (!c.measured.at<std::uint8_t>(v, u) || std::isnan(rays.dirs.at<cv::Vec3f>(v, u)[0])) {
     label = kSweepNoRay;
     return;
   }
@@ -227,42 +205,114 @@ void PlaneSweepOptions::Check() const {
   Require(road_tolerance > 0 && road_tolerance < 1, "road_tolerance", road_tolerance, "0 < t < 1");
 }
 
-SweepResult PlaneSweep(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& previous,
-                       const cv::Mat& current, const Pose& previous_from_current, const cv::Mat& valid,
-                       const PlaneSweepOptions& o) {
-  o.Check();
+PlaneSweeper::PlaneSweeper(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& valid,
+                           const cv::Mat& region, const PlaneSweepOptions& options)
+    : model_(model), vehicle_from_camera_(vehicle_from_camera), valid_(valid), options_(options) {
+  options_.Check();
   const cv::Size size(model.width(), model.height());
-  for (const cv::Mat* m : {&previous, &current}) {
+  for (const cv::Mat* m : {&valid, &region}) {
+    if (!m->empty() && (m->type() != CV_8U || m->size() != size)) {
+      throw Error("plane sweep: the valid-pixel and region masks must be CV_8U of the camera's size");
+    }
+  }
+  const cv::Rect whole(0, 0, size.width, size.height);
+  const int half = options_.window_px / 2;
+  roi_ = region.empty() ? whole : cv::boundingRect(region);
+  roi_ = cv::Rect(roi_.x - half, roi_.y - half, roi_.width + 2 * half, roi_.height + 2 * half) & whole;
+  dirs_.create(roi_.size(), CV_32FC3);
+  road_m_.create(roi_.size(), CV_32F);
+  measured_.create(roi_.size(), CV_8U);
+  const Eigen::Vector3d& o = vehicle_from_camera.t;
+  cv::parallel_for_(cv::Range(0, roi_.height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      for (int u = 0; u < roi_.width; ++u) {
+        const int x = u + roi_.x, y = v + roi_.y;
+        Eigen::Vector3d ray;
+        cv::Vec3f& dir = dirs_.at<cv::Vec3f>(v, u);
+        float& road = road_m_.at<float>(v, u);
+        const bool sees = (valid.empty() || valid.at<std::uint8_t>(y, x)) && model.Unproject({x, y}, &ray);
+        measured_.at<std::uint8_t>(v, u) = sees && (region.empty() || region.at<std::uint8_t>(y, x)) ? 255 : 0;
+        if (!sees) {
+          dir = cv::Vec3f(kNaN, kNaN, kNaN);
+          road = kNaN;
+          continue;
+        }
+        const Eigen::Vector3d d = vehicle_from_camera.R * ray;
+        dir = cv::Vec3f(static_cast<float>(d.x()), static_cast<float>(d.y()), static_cast<float>(d.z()));
+        road = d.y() > 1e-6 && o.y() < 0 ? static_cast<float>(-o.y() / d.y()) : std::numeric_limits<float>::infinity();
+      }
+    }
+  });
+}
+
+SweepResult PlaneSweeper::Sweep(const cv::Mat& previous, const cv::Mat& current, const Pose& previous_from_current) const {
+  return Sweep(std::vector<EarlierFrame>{{previous, previous_from_current}}, current);
+}
+
+SweepResult PlaneSweeper::Sweep(const std::vector<EarlierFrame>& earlier, const cv::Mat& current) const {
+  const cv::Size size(model_.width(), model_.height());
+  if (earlier.empty()) throw Error("plane sweep: no earlier frame");
+  for (const cv::Mat* m : {&earlier.front().image, &current}) {
     if (m->type() != CV_8U || m->size() != size) throw Error("plane sweep: images must be grey and the camera's size");
   }
-  if (!valid.empty() && (valid.type() != CV_8U || valid.size() != size)) {
-    throw Error("plane sweep: the valid-pixel mask must be CV_8U of the camera's size");
-  }
-  const Rays rays = PixelRays(model, vehicle_from_camera, valid);
-  const Reference ref = MakeReference(current, rays, o.window_px);
-  cv::Mat earlier;
-  previous.convertTo(earlier, CV_32F);
+  const PlaneSweepOptions& o = options_;
+  const Rays rays{dirs_, road_m_};
+  const Reference ref = MakeReference(current(roi_), rays, o.window_px);
   std::vector<double> distances;
   const double inv_near = 1 / o.min_distance_m, inv_far = 1 / o.max_distance_m;
   for (int k = 0; k < o.distances; ++k) distances.push_back(1 / (inv_near + (inv_far - inv_near) * k / (o.distances - 1)));
-  std::vector<cv::Mat> maps, scores;
-  for (size_t k = 0; k <= distances.size(); ++k) {
-    const double d = k < distances.size() ? distances[k] : -1.0;  // the last: the road
-    maps.push_back(WarpMap(model, vehicle_from_camera, previous_from_current, rays, valid, d));
-    scores.push_back(Zncc(ref, earlier, maps.back(), o.window_px));
+  // The longest baseline first: its warps are the ones kept.
+  std::vector<const EarlierFrame*> frames;
+  for (const EarlierFrame& e : earlier) {
+    if (e.image.type() != CV_8U || e.image.size() != size) throw Error("plane sweep: images must be grey and the camera's size");
+    frames.push_back(&e);
   }
+  const Eigen::Vector3d& c = vehicle_from_camera_.t;
+  std::stable_sort(frames.begin(), frames.end(), [&](const EarlierFrame* a, const EarlierFrame* b) {
+    return (a->previous_from_current.Apply(c) - c).norm() > (b->previous_from_current.Apply(c) - c).norm();
+  });
+  std::vector<cv::Mat> maps(distances.size() + 1), scores(distances.size() + 1);
+  for (const EarlierFrame* e : frames) {
+    cv::Mat image;
+    e->image.convertTo(image, CV_32F);
+    for (size_t k = 0; k <= distances.size(); ++k) {
+      const double d = k < distances.size() ? distances[k] : -1.0;  // the last: the road
+      cv::Mat map = WarpMap(model_, vehicle_from_camera_, e->previous_from_current, rays, valid_, d);
+      const cv::Mat score = Zncc(ref, image, map, o.window_px);
+      if (scores[k].empty()) {
+        maps[k] = map;
+        scores[k] = score;
+      } else {
+        scores[k] += score;  // NaN where either is
+      }
+    }
+  }
+  for (cv::Mat& s : scores) s *= 1.0 / static_cast<double>(frames.size());
+  SweepResult box;
+  box.distance_m = cv::Mat(roi_.size(), CV_32F, cv::Scalar(kNaN));
+  box.label = cv::Mat(roi_.size(), CV_8U, cv::Scalar(kSweepNoRay));
+  box.score = cv::Mat(roi_.size(), CV_32F, cv::Scalar(kNaN));
+  const cv::Mat parallax = Parallax(model_, vehicle_from_camera_, frames.front()->previous_from_current, rays, o);
+  const PixelChoice choice{measured_, scores, maps, distances, parallax, o};
+  cv::parallel_for_(cv::Range(0, roi_.height), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      for (int u = 0; u < roi_.width; ++u) Choose(choice, rays, ref, u, v, &box);
+    }
+  });
   SweepResult out;
   out.distance_m = cv::Mat(size, CV_32F, cv::Scalar(kNaN));
   out.label = cv::Mat(size, CV_8U, cv::Scalar(kSweepNoRay));
   out.score = cv::Mat(size, CV_32F, cv::Scalar(kNaN));
-  const cv::Mat parallax = Parallax(model, vehicle_from_camera, previous_from_current, rays, o);
-  const PixelChoice choice{scores, maps, distances, parallax, o};
-  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
-    for (int v = rows.start; v < rows.end; ++v) {
-      for (int u = 0; u < size.width; ++u) Choose(choice, rays, ref, u, v, &out);
-    }
-  });
+  box.distance_m.copyTo(out.distance_m(roi_));
+  box.label.copyTo(out.label(roi_));
+  box.score.copyTo(out.score(roi_));
   return out;
+}
+
+SweepResult PlaneSweep(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& previous,
+                       const cv::Mat& current, const Pose& previous_from_current, const cv::Mat& valid,
+                       const PlaneSweepOptions& options) {
+  return PlaneSweeper(model, vehicle_from_camera, valid, cv::Mat(), options).Sweep(previous, current, previous_from_current);
 }
 
 }  // namespace dps

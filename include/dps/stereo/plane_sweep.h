@@ -57,10 +57,46 @@ struct SweepResult {
   cv::Mat score;       // CV_32F, the best ZNCC (NaN where nothing was scored)
 };
 
-// The sweep of `current` against `previous` (grey, CV_8U, the camera's image size) for a camera
-// mounted at `vehicle_from_camera`, the vehicle having moved by `previous_from_current` (the
-// current vehicle frame expressed in the earlier one). `valid` (CV_8U, 255 = sees the world; empty
-// = every pixel the model unprojects) masks both images.
+// An earlier frame to sweep against: its grey image and where the current vehicle frame lies in
+// its vehicle frame.
+struct EarlierFrame {
+  cv::Mat image;
+  Pose previous_from_current;
+};
+
+// One camera's sweeps: its rays are computed once.
+class PlaneSweeper {
+ public:
+  // A camera of this model mounted at `vehicle_from_camera`. `valid` (CV_8U, 255 = sees the world;
+  // empty = every pixel the model unprojects) masks both images; `region` (CV_8U, empty = all)
+  // limits the pixels measured (the work is done on their bounding box only).
+  PlaneSweeper(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& valid,
+               const cv::Mat& region, const PlaneSweepOptions& options = {});
+
+  // The sweep of `current` against `previous` (grey, CV_8U, the camera's image size), the vehicle
+  // having moved by `previous_from_current` (the current vehicle frame in the earlier one).
+  SweepResult Sweep(const cv::Mat& previous, const cv::Mat& current, const Pose& previous_from_current) const;
+  // Against several earlier frames at once: a surface's score is the mean of its ZNCC in each (a
+  // window not whole in one of them is not scored), so that only what stays where a static world
+  // puts it scores well in all (seed 004: the images against a reference image). The frame with
+  // the longest baseline decides what warps where (uniqueness, the road, the epipoles).
+  SweepResult Sweep(const std::vector<EarlierFrame>& earlier, const cv::Mat& current) const;
+
+  const CameraModel& model() const { return model_; }
+  const Pose& vehicle_from_camera() const { return vehicle_from_camera_; }
+
+ private:
+  CameraModel model_;
+  Pose vehicle_from_camera_;
+  cv::Mat valid_;
+  PlaneSweepOptions options_;
+  cv::Rect roi_;       // the region's bounding box, widened by half a window
+  cv::Mat dirs_;       // CV_32FC3 over roi_: rays in the vehicle frame, NaN outside the region
+  cv::Mat road_m_;     // CV_32F over roi_: distance to the road along the ray (+inf above the horizon)
+  cv::Mat measured_;   // CV_8U over roi_: the region's valid pixels
+};
+
+// A one-off sweep (PlaneSweeper with no region).
 SweepResult PlaneSweep(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& previous,
                        const cv::Mat& current, const Pose& previous_from_current, const cv::Mat& valid,
                        const PlaneSweepOptions& options = {});
