@@ -565,6 +565,25 @@ void TestSideCoverage() {
   CHECK_EQ(cv::countNonZero(valid_columns.colRange(hi + 1, w)), 0);
   CHECK(valid_columns.at<std::uint8_t>(0, lo) && valid_columns.at<std::uint8_t>(0, hi));
   CHECK(dps::MatchedColumns(w, st) == std::make_pair(lo, hi));
+  // A view reaching 60 degrees behind its axis: its backward edge looks 150 degrees from straight
+  // ahead, its forward edge as far forward as the symmetric view's; without it, the symmetric view.
+  dps::SideDetectorOptions back = o.side;
+  back.back_half_angle_deg = 60.0;
+  for (const dps::Side side : {dps::Side::kLeft, dps::Side::kRight}) {
+    const dps::ViewSpec symmetric = dps::SideDetectorViewSpec(side, o.side);
+    const dps::ViewSpec plain = dps::SideViewSpec(side, w, o.side.view_height, o.side.focal_px, 0.0, o.side.horizon_fraction);
+    CHECK(symmetric.width == plain.width && symmetric.cx == plain.cx);
+    const dps::ViewSpec view = dps::SideDetectorViewSpec(side, back);
+    const auto bearing = [&](const dps::ViewSpec& v, double x) {  // degrees from +Z, either side
+      const Eigen::Vector3d ray = v.vehicle_from_view * Eigen::Vector3d((x - v.cx) / v.focal_px, 0, 1);
+      return std::atan2(std::abs(ray.x()), ray.z()) * 180 / M_PI;
+    };
+    const bool left = side == dps::Side::kLeft;  // image x runs forwards in a left view
+    const double back_edge = bearing(view, left ? -0.5 : view.width - 0.5);
+    const double front_edge = bearing(view, left ? view.width - 0.5 : -0.5);
+    CHECK_NEAR(back_edge, 150.0, 0.2);
+    CHECK_NEAR(front_edge, bearing(plain, left ? plain.width - 0.5 : -0.5), 0.2);
+  }
 }
 
 // Front detections of the parked row's frame `last` (straight at 8 m/s; `objects` placed at

@@ -177,6 +177,7 @@ void SideDetectorOptions::Check() const {
   Require(view_height > 0 && view_height <= 8192, "view_height", view_height, "1..8192 px");
   Require(focal_px > 0 && focal_px <= 100.0 * view_width, "focal_px", focal_px, "> 0 and at most 100 view widths");
   Require(horizon_fraction > 0 && horizon_fraction < 1, "horizon_fraction", horizon_fraction, "0 < h < 1");
+  Require(back_half_angle_deg >= 0 && back_half_angle_deg < 80, "back_half_angle_deg", back_half_angle_deg, "0 <= a < 80");
   Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
   Require(max_depth_m > 0, "max_depth_m", max_depth_m, "> 0");
   Require(own_car_height_m >= 0, "own_car_height_m", own_car_height_m, ">= 0");
@@ -227,6 +228,24 @@ Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, c
   return s;
 }
 
+namespace {
+// A side view's width and the share of its columns behind the principal column, at `scale`.
+std::pair<int, double> SideViewColumns(const SideDetectorOptions& o, double scale) {
+  const int width = static_cast<int>(std::lround(o.view_width * scale));
+  if (o.back_half_angle_deg <= 0.0) return {width, 0.5};
+  const double front = (width - 1) / 2.0;
+  const double back = o.focal_px * scale * std::tan(o.back_half_angle_deg * 3.14159265358979323846 / 180.0);
+  const int total = static_cast<int>(std::lround(front + back)) + 1;
+  return {total, (total - 1 - front) / (total - 1)};
+}
+}  // namespace
+
+ViewSpec SideDetectorViewSpec(Side side, const SideDetectorOptions& o, double scale, double yaw_rad) {
+  const auto [width, back_fraction] = SideViewColumns(o, scale);
+  return SideViewSpec(side, width, static_cast<int>(std::lround(o.view_height * scale)), o.focal_px * scale, yaw_rad,
+                      o.horizon_fraction, back_fraction);
+}
+
 std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo) {
   const auto [first, last] = MatchedColumns(width, stereo);
   if (side == Side::kLeft) return {width - 1 - last, width - 1 - first};
@@ -244,9 +263,10 @@ SideViewCache& SideDetector::Views(int sixteenths) {
   std::unique_ptr<SideViewCache>& views = views_[sixteenths];
   if (!views) {
     const double s = sixteenths / 16.0;
-    views = std::make_unique<SideViewCache>(camera_, side_, static_cast<int>(std::lround(options_.view_width * s)),
-                                            static_cast<int>(std::lround(options_.view_height * s)),
-                                            options_.focal_px * s, kSideViewYawStepRad, 16, options_.horizon_fraction);
+    const auto [width, back_fraction] = SideViewColumns(options_, s);
+    views = std::make_unique<SideViewCache>(camera_, side_, width, static_cast<int>(std::lround(options_.view_height * s)),
+                                            options_.focal_px * s, kSideViewYawStepRad, 16, options_.horizon_fraction,
+                                            back_fraction);
   }
   return *views;
 }

@@ -91,8 +91,7 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
     // Each side view's columns that motion stereo matches, at the views' full size (at speed the
     // views shrink and their matched columns span less: SideResult::sector is each frame's).
     for (const auto& [name, side, at] : {std::make_tuple("left", Side::kLeft, l), std::make_tuple("right", Side::kRight, r)}) {
-      const ViewSpec view = SideViewSpec(side, o.side.view_width, o.side.view_height, o.side.focal_px, 0.0,
-                                         o.side.horizon_fraction);
+      const ViewSpec view = SideDetectorViewSpec(side, o.side);
       const auto [first, last] = SideMatchedColumns(side, view.width, o.side.stereo);
       c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last));
     }

@@ -63,12 +63,15 @@ ViewSpec FrontViewSpec(const Rig& rig, const std::string& left_camera,
   return CentredSpec(width, height, focal_px, x, z.cross(x), z);
 }
 
-ViewSpec SideViewSpec(Side side, int width, int height, double focal_px, double yaw_rad, double horizon_fraction) {
+ViewSpec SideViewSpec(Side side, int width, int height, double focal_px, double yaw_rad, double horizon_fraction,
+                      double back_fraction) {
   const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
   const Eigen::Vector3d z = side == Side::kLeft ? Eigen::Vector3d(-c, 0, s) : Eigen::Vector3d(c, 0, s);
   const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
   ViewSpec spec = CentredSpec(width, height, focal_px, y.cross(z), y, z);
   spec.cy = horizon_fraction * (height - 1);
+  // Image x runs backwards in a right view and forwards in a left one.
+  if (back_fraction != 0.5) spec.cx = (side == Side::kRight ? 1.0 - back_fraction : back_fraction) * (width - 1);
   return spec;
 }
 
@@ -129,9 +132,10 @@ bool VirtualView::ProjectVehicle(const Eigen::Vector3d& p, Eigen::Vector2d* pixe
 }
 
 SideViewCache::SideViewCache(const RigCamera& camera, Side side, int width, int height,
-                             double focal_px, double yaw_step_rad, size_t capacity, double horizon_fraction)
+                             double focal_px, double yaw_step_rad, size_t capacity, double horizon_fraction,
+                             double back_fraction)
     : camera_(camera), side_(side), width_(width), height_(height), focal_px_(focal_px),
-      horizon_fraction_(horizon_fraction), step_(yaw_step_rad), capacity_(capacity) {
+      horizon_fraction_(horizon_fraction), back_fraction_(back_fraction), step_(yaw_step_rad), capacity_(capacity) {
   if (!(yaw_step_rad > 0.0)) throw Error(Str("side view cache: yaw step ", yaw_step_rad, ": violated constraint > 0"));
   if (capacity < 1) throw Error("side view cache: capacity must be >= 1");
 }
@@ -147,7 +151,7 @@ const VirtualView& SideViewCache::Get(double yaw_rad) {
     }
   }
   views_.emplace_front(key, std::make_unique<VirtualView>(
-                                camera_, SideViewSpec(side_, width_, height_, focal_px_, key * step_, horizon_fraction_)));
+                                camera_, SideViewSpec(side_, width_, height_, focal_px_, key * step_, horizon_fraction_, back_fraction_)));
   ++builds_;
   if (views_.size() > capacity_) views_.pop_back();
   return *views_.front().second;

@@ -32,9 +32,12 @@
 namespace dps {
 
 struct SideDetectorOptions {
-  int view_width = 400;        // side view size, px
+  int view_width = 400;        // side view size, px (with back_half_angle_deg, its forward half twice)
   int view_height = 200;
   double focal_px = 170.0;
+  // > 0: the view reaches this far behind its axis instead of as far as in front (the blind spot
+  // behind the mirrors), its width growing by focal_px x tan of it; deg, 0 <= a < 80.
+  double back_half_angle_deg = 0.0;
   // The horizon's row as a fraction of the height: below it the view reaches 37 degrees down at
   // the defaults, so a camera 0.9 m high sees where objects 1.2 m away meet the road.
   double horizon_fraction = 0.35;
@@ -109,6 +112,8 @@ Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, c
 // The columns [first, last] of a side view `width` pixels wide that motion stereo matches with
 // these stereo options (the left side's view is matched mirrored).
 std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo);
+// The side view of these options with its size and focal length times `scale`, turned by yaw_rad.
+ViewSpec SideDetectorViewSpec(Side side, const SideDetectorOptions& options, double scale = 1.0, double yaw_rad = 0.0);
 
 class SideDetector {
  public:

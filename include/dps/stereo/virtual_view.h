@@ -51,12 +51,13 @@ ViewSpec FrontViewSpec(const Rig& rig, const std::string& left_camera,
 
 // A side view: looking towards -X (left side) or +X (right side), image plane vertical and
 // parallel to the vehicle's Z; turned about the vertical axis by yaw_rad (positive = towards the
-// front, for either side). Principal point at the centre column and at horizon_fraction of the
-// height (the horizon's row; below 0.5 the view looks further down, towards where nearby
-// objects meet the road).
+// front, for either side). Principal point at horizon_fraction of the height (the horizon's row;
+// below 0.5 the view looks further down, towards where nearby objects meet the road) and with
+// back_fraction of the columns beyond it on the view's backward side (0.5: the centre column;
+// more: the view reaches further back, towards the blind spot behind the mirrors).
 enum class Side { kLeft, kRight };
 ViewSpec SideViewSpec(Side side, int width, int height, double focal_px, double yaw_rad = 0.0,
-                      double horizon_fraction = 0.5);
+                      double horizon_fraction = 0.5, double back_fraction = 0.5);
 
 class VirtualView {
  public:
@@ -94,11 +95,11 @@ constexpr double kSideViewYawStepRad = 0.25 * 3.14159265358979323846 / 180.0;  /
 
 class SideViewCache {
  public:
-  // yaw_step_rad > 0: yaws are rounded to multiples of it; capacity >= 1; horizon_fraction as
-  // for SideViewSpec.
+  // yaw_step_rad > 0: yaws are rounded to multiples of it; capacity >= 1; horizon_fraction and
+  // back_fraction as for SideViewSpec.
   SideViewCache(const RigCamera& camera, Side side, int width, int height, double focal_px,
                 double yaw_step_rad = kSideViewYawStepRad, size_t capacity = 16,
-                double horizon_fraction = 0.5);
+                double horizon_fraction = 0.5, double back_fraction = 0.5);
 
   // The view for the yaw nearest to yaw_rad on the quantisation grid.
   const VirtualView& Get(double yaw_rad);
@@ -110,7 +111,7 @@ class SideViewCache {
   RigCamera camera_;
   Side side_;
   int width_, height_;
-  double focal_px_, horizon_fraction_, step_;
+  double focal_px_, horizon_fraction_, back_fraction_, step_;
   size_t capacity_;
   size_t builds_ = 0;
   std::list<std::pair<long, std::unique_ptr<VirtualView>>> views_;  // most recent first
