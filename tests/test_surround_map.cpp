@@ -54,6 +54,21 @@ void TestBackgroundAndObstacles() {
   // The front sector shaded, the ground behind (outside it, between range rings) left white.
   CHECK(!White(background.at<cv::Vec3b>(Pixel(0.0, 12.0))));
   CHECK(White(background.at<cv::Vec3b>(Pixel(0.0, -12.0))));
+  // The legend at the bottom right: a swatch of the front sector's shade as the map shows it, and
+  // of the grid's free colour (the map behind the car there is otherwise white).
+  const cv::Vec3b shade = background.at<cv::Vec3b>(Pixel(0.0, 12.0));
+  const cv::Mat corner = background(cv::Rect(kMap.size_px - 220, kMap.size_px - 220, 220, 220));
+  int shaded = 0, free_colour = 0;
+  for (int v = 0; v < corner.rows; ++v) {
+    for (int u = 0; u < corner.cols; ++u) {
+      const cv::Vec3b p = corner.at<cv::Vec3b>(v, u);
+      shaded += cv::norm(cv::Vec3i(p) - cv::Vec3i(shade), cv::NORM_INF) <= 1;
+      free_colour += p == cv::Vec3b(dps::kGridFreeBlueRed, dps::kGridFreeGreen, dps::kGridFreeBlueRed);
+    }
+  }
+  CHECK(shaded >= 100);
+  CHECK(free_colour >= 100);
+  CHECK(White(background.at<cv::Vec3b>(Pixel(-8.0, -25.0))));  // the bottom left: no legend
 
   // An obstacle 10 m ahead, 4 m to the right: a 2 m wide row of ground points.
   std::vector<Eigen::Vector2d> points;

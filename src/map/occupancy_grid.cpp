@@ -18,7 +18,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 // The map's colours for the grid (BGR): occupied cells grey, free ones light green.
-constexpr int kOccupiedGrey = 90, kFreeBlueRed = 215, kFreeGreen = 240;
 
 constexpr int kShift = 4;  // fillPoly's fractional bits
 
@@ -172,8 +171,8 @@ void BlendRow(const std::uint8_t* e, const std::uint8_t* bg, std::uint8_t* px, i
   int u = 0;
 #if CV_SIMD
   const cv::v_uint8 unknown = cv::vx_setall_u8(128);
-  const cv::v_int16 mid = cv::vx_setall_s16(128), grey = cv::vx_setall_s16(kOccupiedGrey);
-  const cv::v_int16 free_bg = cv::vx_setall_s16(kFreeBlueRed), free_g = cv::vx_setall_s16(kFreeGreen);
+  const cv::v_int16 mid = cv::vx_setall_s16(128), grey = cv::vx_setall_s16(kGridOccupiedGrey);
+  const cv::v_int16 free_bg = cv::vx_setall_s16(kGridFreeBlueRed), free_g = cv::vx_setall_s16(kGridFreeGreen);
   // One half of a register of pixels: the channel p (8 bits widened) towards its target.
   const auto blend = [&](const cv::v_uint16& level16, const cv::v_uint16& p16, const cv::v_int16& free_target) {
     const cv::v_int16 signed_level = cv::v_reinterpret_as_s16(level16) - mid;
@@ -208,8 +207,8 @@ void BlendRow(const std::uint8_t* e, const std::uint8_t* bg, std::uint8_t* px, i
   for (; u < cols; ++u) {
     const int a = std::abs(e[u] - 128);
     const bool occupied = e[u] > 128;
-    const int targets[3] = {occupied ? kOccupiedGrey : kFreeBlueRed, occupied ? kOccupiedGrey : kFreeGreen,
-                            occupied ? kOccupiedGrey : kFreeBlueRed};
+    const int targets[3] = {occupied ? kGridOccupiedGrey : kGridFreeBlueRed, occupied ? kGridOccupiedGrey : kGridFreeGreen,
+                            occupied ? kGridOccupiedGrey : kGridFreeBlueRed};
     for (int k = 0; k < 3; ++k) {
       const int c = bg[3 * u + k];
       px[3 * u + k] = static_cast<std::uint8_t>(c + (((targets[k] - c) * a) >> 7));

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
@@ -11,6 +13,9 @@
 namespace dps {
 
 namespace {
+
+// The obstacles' colour, their nearest points', the tracks'.
+const cv::Scalar kObstacleColour(0, 0, 220), kNearestColour(0, 0, 120), kTrackColour(200, 80, 0);
 
 // Vehicle-frame (x, z) to map pixels: the vehicle origin at the centre, +Z up.
 struct MapProjection {
@@ -22,6 +27,52 @@ struct MapProjection {
     return cv::Point(cvRound(centre.x + x * scale), cvRound(centre.y - z * scale));
   }
 };
+
+// Each sector's shading: its colour blended over the white map.
+const cv::Scalar kShades[] = {cv::Scalar(235, 245, 225), cv::Scalar(240, 230, 250), cv::Scalar(225, 240, 250)};
+constexpr double kShadeWeight = 0.7;
+
+cv::Scalar SectorShade(size_t k) { return kShades[k % 3] * kShadeWeight + cv::Scalar::all(255) * (1 - kShadeWeight); }
+
+// The legend's box at the bottom right (room for three sources; empty on maps too small for it).
+constexpr int kLegendLine = 14, kLegendLines = 10;
+cv::Rect LegendRect(const cv::Size& map) {
+  const int width = 190, height = kLegendLine * kLegendLines + 8;
+  const cv::Rect box(map.width - width - 6, map.height - height - 6, width, height);
+  return box.x < map.width / 2 || box.y < map.height / 2 ? cv::Rect() : box;
+}
+
+// What the colours mean, in LegendRect: each source's ground, what no source measures, obstacles
+// and their nearest points, tracks, the grid, the own car.
+void DrawLegend(cv::Mat& map, const Coverage& coverage) {
+  struct Entry {
+    cv::Scalar colour;
+    std::string text;
+  };
+  std::vector<Entry> entries;
+  for (size_t k = 0; k < coverage.sectors.size(); ++k) {
+    const std::string& n = coverage.sectors[k].name;
+    if (k < 3) entries.push_back({SectorShade(k), n == "front" ? "front: stereo pair" : n + ": motion stereo"});
+  }
+  entries.push_back({cv::Scalar::all(255), "not measured"});
+  entries.push_back({kObstacleColour, "obstacle"});
+  entries.push_back({kNearestColour, "its nearest point"});
+  entries.push_back({kTrackColour, "track: id, prediction"});
+  entries.push_back({cv::Scalar::all(kGridOccupiedGrey), "grid: occupied"});
+  entries.push_back({cv::Scalar(kGridFreeBlueRed, kGridFreeGreen, kGridFreeBlueRed), "grid: free"});
+  entries.push_back({cv::Scalar(0, 0, 0), "own car"});
+  const cv::Rect box = LegendRect(map.size());
+  if (box.empty()) return;
+  map(box).setTo(cv::Scalar::all(255));
+  cv::rectangle(map, box, cv::Scalar::all(120), 1);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const cv::Point at(box.x + 6, box.y + 5 + kLegendLine * static_cast<int>(i));
+    cv::rectangle(map, cv::Rect(at, cv::Size(16, 10)), entries[i].colour, cv::FILLED);
+    cv::rectangle(map, cv::Rect(at, cv::Size(16, 10)), cv::Scalar::all(160), 1);
+    cv::putText(map, entries[i].text, at + cv::Point(22, 9), cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar::all(0), 1,
+                cv::LINE_AA);
+  }
+}
 
 }  // namespace
 
@@ -37,8 +88,7 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
   cv::Mat map(o.size_px, o.size_px, CV_8UC3, cv::Scalar(255, 255, 255));
 
   // Coverage: each sector lightly shaded.
-  const cv::Scalar shades[] = {cv::Scalar(235, 245, 225), cv::Scalar(240, 230, 250), cv::Scalar(225, 240, 250)};
-  int k = 0;
+  size_t k = 0;
   for (const Sector& s : coverage.sectors) {
     const Eigen::Vector2d v = s.Vertex();
     std::vector<cv::Point> poly{to_px(v.x(), v.y())};
@@ -47,8 +97,8 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
       poly.push_back(to_px(v.x() + 2 * o.range_m * std::sin(a), v.y() + 2 * o.range_m * std::cos(a)));
     }
     cv::Mat layer = map.clone();
-    cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{poly}, shades[k++ % 3]);
-    cv::addWeighted(layer, 0.7, map, 0.3, 0, map);
+    cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{poly}, kShades[k++ % 3]);
+    cv::addWeighted(layer, kShadeWeight, map, 1 - kShadeWeight, 0, map);
   }
   // Range rings and their labels.
   for (double r = o.ring_step_m; r <= o.range_m * 1.42; r += o.ring_step_m) {
@@ -63,6 +113,7 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
   const cv::Point bar(12, o.size_px - 14);
   cv::line(map, bar, bar + cv::Point(cvRound(5 * scale), 0), cv::Scalar(0, 0, 0), 2);
   cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  DrawLegend(map, coverage);
   return map;
 }
 
@@ -92,9 +143,9 @@ void DrawObstacles(cv::Mat& map, const std::vector<Detection>& detections, const
     cv::polylines(mask, pts, false, cv::Scalar(255), std::max(2, cvRound(0.25 * scale)));
     for (const cv::Point& p : pts) cv::circle(mask, p, std::max(1, cvRound(0.15 * scale)), cv::Scalar(255), cv::FILLED);
     cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);
-    map(box).setTo(cv::Scalar(0, 0, 220), mask);
+    map(box).setTo(kObstacleColour, mask);
   }
-  for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, cv::Scalar(0, 0, 120), cv::FILLED, cv::LINE_AA);
+  for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, kNearestColour, cv::FILLED, cv::LINE_AA);
   cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
 }
 
@@ -119,9 +170,9 @@ void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOp
     const cv::Size axes(std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(1))) * to_px.scale)),
                         std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(0))) * to_px.scale)));
     cv::ellipse(map, ahead, axes, angle, 0, 360, cv::Scalar(200, 120, 0), 1, cv::LINE_AA);
-    cv::arrowedLine(map, at, ahead, cv::Scalar(200, 80, 0), 2, cv::LINE_AA, 0, 0.2);
-    cv::putText(map, std::to_string(t.id), at + cv::Point(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                cv::Scalar(200, 80, 0), 1, cv::LINE_AA);
+    cv::arrowedLine(map, at, ahead, kTrackColour, 2, cv::LINE_AA, 0, 0.2);
+    cv::putText(map, std::to_string(t.id), at + cv::Point(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45, kTrackColour, 1,
+                cv::LINE_AA);
   }
 }
 
@@ -137,6 +188,8 @@ void DrawFrameMap(const cv::Mat& background, const OccupancyGrid& grid, const Ve
                   const std::vector<Detection>& detections, const std::vector<TrackState>& tracks,
                   const MapOptions& options, const std::string& caption, cv::Mat& map) {
   grid.Draw(background, map, options.range_m);
+  const cv::Rect legend = LegendRect(map.size());
+  if (!legend.empty()) background(legend).copyTo(map(legend));  // over the grid
   DrawOwnCar(map, vehicle, options);
   DrawObstacles(map, detections, options, caption);
   DrawTracks(map, tracks, options);

@@ -23,6 +23,10 @@
 
 namespace dps {
 
+// The grid's colours on the map: occupied cells blend towards grey, free ones towards light
+// green (B = R = kGridFreeBlueRed, G = kGridFreeGreen), by their evidence.
+constexpr int kGridOccupiedGrey = 90, kGridFreeBlueRed = 215, kGridFreeGreen = 240;
+
 struct OccupancyOptions {
   double cell_m = 0.2;            // > 0
   int cells = 400;                // grid side, cells (80 m at 0.2 m), >= 16

@@ -25,7 +25,8 @@ struct MapOptions {
   void Check() const;
 };
 
-// What every frame's map shares: coverage shading, range rings, the own car, the scale bar.
+// What every frame's map shares: coverage shading, range rings, the own car, the scale bar and a
+// legend of the colours (bottom right; none on maps under about 400 px).
 cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& options);
 
 // The own car (black) on a map picture; DrawMapBackground draws it too, this redraws it over
