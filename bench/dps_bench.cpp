@@ -1,7 +1,8 @@
 // dps-bench: times dps's stereo matcher against cv::StereoBM on the same pairs in the same run
 // (same disparity range and block size), with and without the left-right check, the virtual
 // view rectification, and the whole per-frame pipeline (what dps-process does between decoding
-// the images and encoding the map) against one StereoBM call at the same omni size. Prints
+// the images and encoding the map) against one StereoBM call at the same omni size, and the plane
+// sweep (one camera, one earlier frame) beside a plain SAD cost volume of the same size. Prints
 // Markdown tables for docs/performance.md.
 #include <algorithm>
 #include <chrono>
@@ -23,6 +24,7 @@
 #include "dps/map/surround_map.h"
 #include "dps/map/tracker.h"
 #include "dps/pipeline/surround_pipeline.h"
+#include "dps/stereo/plane_sweep.h"
 #include "dps/stereo/sad_stereo.h"
 #include "dps/stereo/virtual_view.h"
 #include "dps/synth/scene_io.h"
@@ -219,6 +221,39 @@ int main(int argc, char** argv) {
                 po.front.view_width, po.front.view_height, po.front.stereo.num_disparities, median(front), median(sides),
                 median(fusion), median(tracking), median(gridding), median(drawing), frame_ms, 1000.0 / frame_ms, bm_median,
                 frame_ms / bm_median);
+  }
+
+  // The plane sweep on one camera's raw omni images (its rays built once), frame 1 against frame
+  // 0 of the scene, its 48 distances and the road, 7x7 ZNCC windows; beside dps's matcher as a
+  // plain SAD cost volume of the same size (the same two images, 48 disparities, 7x7, one level,
+  // no left-right check).
+  std::printf("\n| omni size | sweep ms | ns per pixel and surface | SAD volume ms (D 48) | ns per pixel and disparity | sweep / SAD |\n"
+              "| --- | --- | --- | --- | --- | --- |\n");
+  for (const auto& [ow, oh] : {std::pair{320, 240}, std::pair{640, 480}}) {
+    dps::Scene scene = dps::ReadScene(scene_path);
+    dps::ResizeScene(&scene, ow, oh);
+    scene.render.supersample = 1;
+    const dps::SceneRenderer renderer(scene);
+    const dps::FrameState a = renderer.StateAt(scene.FrameTime(0)), b = renderer.StateAt(scene.FrameTime(1));
+    cv::Mat previous, current;
+    cv::cvtColor(renderer.Render(a, 0, 0).image, previous, cv::COLOR_BGR2GRAY);
+    cv::cvtColor(renderer.Render(b, 0, 1).image, current, cv::COLOR_BGR2GRAY);
+    const dps::RigCamera& cam = scene.rig.cameras[0];
+    const dps::PlaneSweepOptions so;
+    const dps::PlaneSweeper sweeper(cam.model, cam.vehicle_from_camera, cv::Mat(), cv::Mat(), so);
+    const dps::Pose motion = a.world_from_vehicle.Inverse() * b.world_from_vehicle;
+    dps::StereoOptions st;
+    st.num_disparities = 48;
+    st.block_width = st.block_height = 7;
+    st.two_levels = false;
+    st.left_right_check = false;
+    st.baseline_kernel = baseline_kernel;
+    dps::SadStereoMatcher matcher(st);
+    const auto [sweep_ms, sad_ms] =
+        MedianMs(7, [&] { sweeper.Sweep(previous, current, motion); }, [&] { matcher.Compute(current, previous); });
+    const double pixels = static_cast<double>(ow) * oh, surfaces = so.distances + 1;
+    std::printf("| %dx%d | %.1f | %.1f | %.2f | %.2f | %.0f |\n", ow, oh, sweep_ms, 1e6 * sweep_ms / (pixels * surfaces),
+                sad_ms, 1e6 * sad_ms / (pixels * st.num_disparities), sweep_ms / sad_ms);
   }
   return 0;
 }
