@@ -28,6 +28,8 @@ printf 'frame,t\n0,0\n1,0.033\n2,0.067\n' > "$seeds/csv/frames.csv"
 printf 'frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n0,0,front,0,0.5,8,8.02,-0.4,1.3,8,12,40\n' > "$seeds/csv/detections.csv"
 printf 'frame,t,track,x,z,vx,vz,sigma_x,sigma_z,age\n0,0,1,0.5,8,0,-1,0.1,0.2,3\n' > "$seeds/csv/tracks.csv"
 printf 'frame,t,id,kind,x,z,heading_deg,length,width,height,vx,vz\n0,0,1,car,0,10,0,4.5,1.8,1.5,0,0\n' > "$seeds/csv/truth.csv"
+printf 'frame,t,boundary,offset,heading_deg,curvature,type,confidence\n0,0,left,-1.75,0,0,dashed,1\n' > "$seeds/csv/lanes.csv"
+printf 'frame,t,lp,lane_width,heading_deg,event\n0,0,0.1,3.5,0,\n1,0.07,0.2,3.5,1,right\n' > "$seeds/csv/ego_lane.csv"
 printf 'camera,line,axis,u,v\nleft,1,Z,100,150\nleft,1,Z,120,170\nleft,1,Z,140,190\n' > "$seeds/marks/marks.csv"
 printf 'Pf\n4 2\n-1.0\n' > "$seeds/disparity/d.pfm" && head -c 32 /dev/zero >> "$seeds/disparity/d.pfm"
 for r in "${READERS[@]}"; do

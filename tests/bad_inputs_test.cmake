@@ -240,6 +240,10 @@ bad(detections_huge "det_huge.csv:2: column 'frame'" "-" "${TOOLS}/dps-eval" --d
 file(WRITE "${WORK}/truth_bad.csv" "frame,t,id\n0,0,1\n")
 bad(truth_columns "truth_bad.csv: missing column" "-" "${TOOLS}/dps-eval" --detections "${WORK}/det_huge.csv"
     --truth "${WORK}/truth_bad.csv" --rig "${WORK}/good/rig.yaml")
+file(WRITE "${WORK}/lanes_bad.csv" "frame,t,boundary,offset,heading_deg,curvature,type,confidence\n0,0,middle,0,0,0,solid,1\n")
+bad(lanes_boundary "lanes_bad.csv:2: column 'boundary': 'middle' is not one of left2, left, right, right2" "-"
+    "${TOOLS}/dps-eval" --lanes "${WORK}/lanes_bad.csv" --truth-lanes "${WORK}/lanes_bad.csv")
+bad(lanes_alone "--lanes and --truth-lanes go together" "-" "${TOOLS}/dps-eval" --lanes "${WORK}/lanes_bad.csv")
 bad(stereo_disparities "num_disparities" "${WORK}/disp.pfm" "${TOOLS}/dps-stereo" "${WORK}/good/left/000000.png"
     "${WORK}/good/right/000000.png" --num-disparities 2147483647 --out "${WORK}/disp.pfm")
 bad(stereo_missing "absent.png" "${WORK}/disp.pfm" "${TOOLS}/dps-stereo" "${WORK}/absent.png"

@@ -7,6 +7,7 @@
 #include "dps/camera/valid_mask.h"
 #include "dps/detect/detection_io.h"
 #include "dps/eval/evaluation.h"
+#include "dps/eval/lane_evaluation.h"
 #include "dps/map/tracker.h"
 #include "dps/map/tracks_io.h"
 #include "dps/synth/truth_io.h"
@@ -15,6 +16,7 @@
 namespace {
 
 const char* kUsage = R"(usage: dps-eval --detections detections.csv [--tracks tracks.csv] --truth truth.csv [options]
+       dps-eval --lanes lanes.csv --truth-lanes truth_lanes.csv [--ego-lane ego_lane.csv --truth-ego-lane FILE]
 
 Scores detections against ground truth (DESIGN.md §5): per frame, a truth object counts when the
 point of its footprint nearest to the vehicle (its near point) is within --max-range and a camera
@@ -40,7 +42,13 @@ the own car's front; rear: behind its back; side: between) and per source.
                       it apply; its vehicle length sets the zones (else 4.8 m)
   --masks DIR         masks/<camera>.png of the cameras (e.g. the drive's masks/ or dps-process's
                       OUT/<drive>/masks/), instead of the rig's
-  --json FILE         also write the scores as JSON
+  --lanes FILE        lanes.csv (lane boundaries per frame), scored against --truth-lanes (dps-synth's
+                      truth_lanes.csv): per boundary the share of the truth's frames where it was
+                      reported, the offset error there (median / 90th percentile) and reports of
+                      boundaries the truth does not have
+  --ego-lane FILE     ego_lane.csv, against --truth-ego-lane: the lateral position error, lane
+                      changes found within 0.3 s (same direction) and invented
+  --json FILE         also write the scores as JSON (with lanes: {"detections", "tracks", "lanes"})
   --errors FILE       also write each scoring error as CSV, to see what went wrong where:
                       frame,error,id,kind,x,z,range — "missed" (a counted object no detection
                       matched: its id, kind and near point) or "false" (a detection in the zone
@@ -53,13 +61,22 @@ the own car's front; rear: behind its back; side: between) and per source.
 
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-eval", [&] {
-    const dps_cli::Args args(argc, argv, {"detections", "tracks", "truth", "max-range", "rig", "masks", "json", "errors"}, {});
+    const dps_cli::Args args(argc, argv,
+                             {"detections", "tracks", "truth", "max-range", "rig", "masks", "json", "errors", "lanes",
+                              "truth-lanes", "ego-lane", "truth-ego-lane"},
+                             {});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
     }
-    if (!args.Has("truth")) throw dps::Error("missing --truth (see --help)");
-    if (!args.Has("detections") && !args.Has("tracks")) throw dps::Error("missing --detections or --tracks (see --help)");
+    const bool lanes = args.Has("lanes") || args.Has("ego-lane");
+    if (args.Has("lanes") != args.Has("truth-lanes")) throw dps::Error("--lanes and --truth-lanes go together (see --help)");
+    if (args.Has("ego-lane") != args.Has("truth-ego-lane")) {
+      throw dps::Error("--ego-lane and --truth-ego-lane go together (see --help)");
+    }
+    const bool objects = args.Has("detections") || args.Has("tracks");
+    if (!objects && !lanes) throw dps::Error("missing --detections, --tracks or --lanes (see --help)");
+    if (objects && !args.Has("truth")) throw dps::Error("missing --truth (see --help)");
     dps::EvaluationOptions options;
     options.max_range_m = args.Number("max-range", 20.0);
     if (!(options.max_range_m > 0)) throw dps::Error("option --max-range: expected > 0");
@@ -73,7 +90,7 @@ int main(int argc, char** argv) {
       }
       options.visibility = std::make_shared<const dps::Visibility>(rig);
     }
-    const std::vector<dps::TruthRow> truth = dps::ReadTruth(args.Get("truth"));
+    const std::vector<dps::TruthRow> truth = objects ? dps::ReadTruth(args.Get("truth")) : std::vector<dps::TruthRow>{};
     std::string json, errors;
     if (args.Has("detections")) {
       const std::vector<dps::Detection> detections = dps::ReadDetections(args.Get("detections"));
@@ -97,6 +114,22 @@ int main(int argc, char** argv) {
       json = "{\"detections\": " + (json.empty() ? std::string("null") : json) + ", \"tracks\": " +
              dps::EvaluationJson(r.positions) + ", \"id_switches\": " + std::to_string(r.id_switches) + "}\n";
       if (errors.empty()) errors = dps::ScoringErrorsCsv(r.positions);
+    }
+    if (lanes) {
+      const auto read = [&](const char* name) {
+        return args.Has(name) ? dps::ReadLaneBoundaries(args.Get(name)) : std::vector<dps::LaneBoundaryRow>{};
+      };
+      const auto read_ego = [&](const char* name) {
+        return args.Has(name) ? dps::ReadEgoLane(args.Get(name)) : std::vector<dps::EgoLaneRow>{};
+      };
+      const dps::LaneEvaluation e =
+          dps::EvaluateLanes(read("lanes"), read("truth-lanes"), read_ego("ego-lane"), read_ego("truth-ego-lane"));
+      std::cout << dps::LaneEvaluationTable(e);
+      const std::string objects_json = json.empty() ? "null" : json;
+      const bool combined = args.Has("tracks");  // already {"detections": ..., "tracks": ...}
+      json = combined ? objects_json.substr(0, objects_json.rfind('}')) + ", \"lanes\": " + dps::LaneEvaluationJson(e) + "}\n"
+                      : "{\"detections\": " + objects_json + ", \"tracks\": null, \"lanes\": " +
+                            dps::LaneEvaluationJson(e) + "}\n";
     }
     if (args.Has("json")) dps::WriteFileAtomically(args.Get("json"), json);
     if (args.Has("errors")) dps::WriteFileAtomically(args.Get("errors"), errors);

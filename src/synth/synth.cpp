@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +13,7 @@
 
 #include "dps/calib/marks_io.h"
 #include "dps/camera/rig_io.h"
+#include "dps/synth/lane_truth.h"
 #include "dps/synth/truth_io.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
@@ -276,6 +278,15 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
     }
     frames_csv.Commit();
     WriteTruth(truth, (tmp / "truth.csv").string());
+    LaneTruth lanes = LaneTruthOf(scene);
+    if (!calibration && scene.road.enabled) {
+      // The rendered frames only (--frames may cut the drive short).
+      const auto rendered = [frames](const auto& row) { return row.frame >= frames; };
+      lanes.boundaries.erase(std::remove_if(lanes.boundaries.begin(), lanes.boundaries.end(), rendered), lanes.boundaries.end());
+      lanes.ego.erase(std::remove_if(lanes.ego.begin(), lanes.ego.end(), rendered), lanes.ego.end());
+      WriteLaneBoundaries(lanes.boundaries, (tmp / "truth_lanes.csv").string());
+      WriteEgoLane(lanes.ego, (tmp / "truth_ego_lane.csv").string());
+    }
     cameras.Close();
   } catch (...) {
     std::error_code ec;

@@ -19,6 +19,7 @@
 #include "dps/stereo/disparity_io.h"
 #include "dps/synth/scene_io.h"
 #include "dps/synth/truth_io.h"
+#include "dps/util/lanes_csv.h"
 #include "dps/util/error.h"
 
 namespace {
@@ -44,6 +45,8 @@ void Read(const std::string& path) {
     try { dps::ReadDetections(path); } catch (const dps::Error&) {}
     try { dps::ReadTracks(path); } catch (const dps::Error&) {}
     try { dps::ReadTruth(path); } catch (const dps::Error&) {}
+    try { dps::ReadLaneBoundaries(path); } catch (const dps::Error&) {}
+    try { dps::ReadEgoLane(path); } catch (const dps::Error&) {}
   } else if (kReader == "marks") {
     dps::ReadMarks(path);
   } else if (kReader == "rig") {

@@ -1,0 +1,171 @@
+// Lane truth and lane scores: dps-synth's truth_lanes.csv / truth_ego_lane.csv against the road
+// geometry worked out independently (the lines carried into the vehicle frame point by point), a
+// lane change found where the vehicle's centre crosses the line, the files read back, bad files
+// refused, and dps-eval's lane scores on reports with known errors.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "check.h"
+#include "dps/camera/ego_motion.h"
+#include "dps/eval/lane_evaluation.h"
+#include "dps/synth/lane_truth.h"
+#include "dps/util/error.h"
+#include "dps/util/lanes_csv.h"
+#include "fixtures.h"
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A drive changing one lane to the right: straight, then turning right and back (yaw rate
+// positive = left), 10 m/s.
+dps::Scene LaneChange() {
+  dps::Scene s = dps_test::SmallScene("lead_car", 320, 240);
+  s.objects.clear();
+  s.duration_s = 5.0;
+  s.ego = dps::MotionProfile({{0.0, 10.0, 0.0}, {1.0, 10.0, 0.0}, {1.001, 10.0, -0.15}, {2.5, 10.0, -0.15},
+                              {2.501, 10.0, 0.15}, {4.0, 10.0, 0.15}, {4.001, 10.0, 0.0}});
+  return s;
+}
+
+// The world line x = line_x seen from `ego`: where it crosses the vehicle's X axis and its heading
+// (degrees from +Z towards +X), from two of its points carried into the vehicle frame.
+std::pair<double, double> LineSeen(const dps::PlanarPose& ego, double line_x) {
+  const Eigen::Vector2d a = dps::WorldToBody(ego, {line_x, ego.z_m}), b = dps::WorldToBody(ego, {line_x, ego.z_m + 10.0});
+  const double u = -a.y() / (b.y() - a.y());
+  return {a.x() + u * (b.x() - a.x()), std::atan2(b.x() - a.x(), b.y() - a.y()) * 180.0 / kPi};
+}
+
+void TestTruth() {
+  const dps::Scene s = LaneChange();
+  const dps::LaneTruth truth = dps::LaneTruthOf(s);
+  CHECK_EQ(static_cast<int>(truth.ego.size()), s.FrameCount());
+  const double w = s.road.lane_width_m;
+  int events = 0, crossing_frame = -1;
+  for (int f = 0; f < s.FrameCount(); ++f) {
+    const dps::PlanarPose ego = s.EgoPoseAt(s.FrameTime(f));
+    if (crossing_frame < 0 && ego.x_m >= w / 2) crossing_frame = f;
+  }
+  CHECK(crossing_frame > 0);
+  for (const dps::EgoLaneRow& e : truth.ego) {
+    const dps::PlanarPose ego = s.EgoPoseAt(e.t_s);
+    const bool after = e.frame >= crossing_frame;
+    // The lane the vehicle is in: the ego lane (centre 0), then the right one (centre w).
+    const auto [left, left_heading] = LineSeen(ego, after ? w / 2 : -w / 2);
+    const auto [right, right_heading] = LineSeen(ego, after ? 3 * w / 2 : w / 2);
+    CHECK_NEAR(e.lp_m, -(left + right) / 2, 1e-9);
+    CHECK_NEAR(e.heading_deg, -left_heading, 1e-9);
+    CHECK_NEAR(e.lane_width_m, w, 1e-12);
+    if (!e.event.empty()) {
+      ++events;
+      CHECK_EQ(e.event, std::string("right"));
+      CHECK_EQ(e.frame, crossing_frame);
+    }
+    for (const dps::LaneBoundaryRow& b : truth.boundaries) {
+      if (b.frame != e.frame) continue;
+      const double expected = b.boundary == "left" ? left : b.boundary == "right" ? right : std::nan("");
+      if (std::isfinite(expected)) CHECK_NEAR(b.offset_m, expected, 1e-9);
+      CHECK_NEAR(b.heading_deg, left_heading, 1e-9);
+    }
+  }
+  CHECK_EQ(events, 1);
+  // Before the change: left2 (the road's left edge, solid), left and right dashed, right2 the
+  // right edge (solid); after it, in the right lane, no right2 (the road ends), left2 dashed.
+  auto find = [&](int frame, const std::string& name) -> const dps::LaneBoundaryRow* {
+    for (const dps::LaneBoundaryRow& b : truth.boundaries) {
+      if (b.frame == frame && b.boundary == name) return &b;
+    }
+    return nullptr;
+  };
+  CHECK(find(0, "left2") && find(0, "left2")->type == "solid" && std::abs(find(0, "left2")->offset_m + 1.5 * w) < 1e-9);
+  CHECK(find(0, "left") && find(0, "left")->type == "dashed");
+  CHECK(find(0, "right2") && find(0, "right2")->type == "solid");
+  const int last = s.FrameCount() - 1;
+  CHECK(find(last, "right") && find(last, "right")->type == "solid");
+  CHECK(!find(last, "right2"));
+  CHECK(find(last, "left2") && find(last, "left2")->type == "dashed");
+  std::printf("lane change: the centre crosses the line at frame %d; lp there %.3f m\n", crossing_frame,
+              truth.ego[crossing_frame].lp_m);
+  // No markings, no lane truth.
+  dps::Scene plain = s;
+  plain.road.enabled = false;
+  CHECK(dps::LaneTruthOf(plain).boundaries.empty());
+}
+
+void TestFiles() {
+  const std::filesystem::path dir = dps_test::ScratchDir("dps_test_lanes");
+  const dps::LaneTruth truth = dps::LaneTruthOf(LaneChange());
+  const std::string lanes = (dir / "truth_lanes.csv").string(), ego = (dir / "truth_ego_lane.csv").string();
+  dps::WriteLaneBoundaries(truth.boundaries, lanes);
+  dps::WriteEgoLane(truth.ego, ego);
+  const std::vector<dps::LaneBoundaryRow> b = dps::ReadLaneBoundaries(lanes);
+  const std::vector<dps::EgoLaneRow> e = dps::ReadEgoLane(ego);
+  CHECK_EQ(b.size(), truth.boundaries.size());
+  CHECK_EQ(e.size(), truth.ego.size());
+  for (size_t i = 0; i < b.size(); ++i) {
+    CHECK(b[i].boundary == truth.boundaries[i].boundary && b[i].type == truth.boundaries[i].type);
+    CHECK_NEAR(b[i].offset_m, truth.boundaries[i].offset_m, 1e-6);
+  }
+  for (size_t i = 0; i < e.size(); ++i) CHECK(e[i].event == truth.ego[i].event);
+  const std::string bad = (dir / "bad.csv").string();
+  std::ofstream(bad) << "frame,t,boundary,offset,heading_deg,curvature,type,confidence\n0,0,middle,0,0,0,solid,1\n";
+  CHECK_THROWS_WITH(dps::ReadLaneBoundaries(bad), dps::Error, "bad.csv:2: column 'boundary': 'middle'");
+  std::ofstream(bad) << "frame,t,boundary,offset,heading_deg,curvature,type,confidence\n0,0,left,0,0,0,solid,1.5\n";
+  CHECK_THROWS_WITH(dps::ReadLaneBoundaries(bad), dps::Error, "bad.csv:2: column 'confidence'");
+}
+
+// Reports with known errors: offsets 0.1 m off, the right boundary missing in the second half,
+// a left2 reported where the truth has none, lp 0.05 m off, the lane change 0.2 s late and one
+// invented.
+void TestScores() {
+  dps::Scene s = LaneChange();
+  const dps::LaneTruth truth = dps::LaneTruthOf(s);
+  const int half = s.FrameCount() / 2;
+  std::vector<dps::LaneBoundaryRow> reported;
+  for (dps::LaneBoundaryRow b : truth.boundaries) {
+    if (b.boundary == "right" && b.frame >= half) continue;
+    b.offset_m += 0.1;
+    reported.push_back(b);
+  }
+  std::vector<dps::EgoLaneRow> ego = truth.ego;
+  int truth_event_frame = -1;
+  for (dps::EgoLaneRow& e : ego) {
+    e.lp_m += 0.05;
+    if (!e.event.empty()) truth_event_frame = e.frame, e.event.clear();
+  }
+  ego[truth_event_frame + 3].event = "right";  // 0.2 s later at 15 fps
+  ego[5].event = "left";
+  const dps::LaneEvaluation e = dps::EvaluateLanes(reported, truth.boundaries, ego, truth.ego);
+  std::printf("%s", dps::LaneEvaluationTable(e).c_str());
+  const dps::BoundaryScore& left = e.boundaries[1];
+  const dps::BoundaryScore& right = e.boundaries[2];
+  CHECK_EQ(left.name, std::string("left"));
+  CHECK_NEAR(left.MedianError(), 0.1, 1e-9);
+  CHECK_EQ(left.FoundRate(), 1.0);
+  CHECK_NEAR(right.FoundRate(), static_cast<double>(half) / s.FrameCount(), 1e-12);
+  CHECK_NEAR(e.MedianLpError(), 0.05, 1e-9);
+  CHECK_EQ(e.truth_events, 1);
+  CHECK_EQ(e.events_found, 1);
+  CHECK_EQ(e.events_invented, 1);
+  // A report of right2 after the change, where the road has no such line: a false report.
+  std::vector<dps::LaneBoundaryRow> extra = truth.boundaries;
+  extra.push_back({s.FrameCount() - 1, s.FrameTime(s.FrameCount() - 1), "right2", 5.0, 0.0, 0.0, "solid", 0.5});
+  CHECK_EQ(dps::EvaluateLanes(extra, truth.boundaries, {}, {}).boundaries[3].false_reports, 1);
+  // The same change reported 0.5 s late is not found, and counts as invented.
+  ego[truth_event_frame + 3].event.clear();
+  ego[truth_event_frame + 8].event = "right";
+  const dps::LaneEvaluation late = dps::EvaluateLanes(reported, truth.boundaries, ego, truth.ego);
+  CHECK_EQ(late.events_found, 0);
+  CHECK_EQ(late.events_invented, 2);
+}
+
+}  // namespace
+
+int main() {
+  TestTruth();
+  TestFiles();
+  TestScores();
+  return dps_test::Report();
+}
