@@ -16,6 +16,7 @@
 #include "dps/map/tracks_io.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
+#include "dps/util/lanes_csv.h"
 
 namespace dps {
 namespace {
@@ -352,6 +353,8 @@ class DriveRun {
   std::vector<Detection> detections_;
   Tracker tracker_;
   std::vector<TrackState> tracks_;
+  std::vector<LaneBoundaryRow> lanes_;  // lanes.csv's rows
+  std::vector<EgoLaneRow> ego_lane_;    // ego_lane.csv's rows
   PlanarPose ego_;  // the vehicle in the tracker's world (its pose at frame 0)
   OccupancyGrid grid_;
   PictureOutputs pictures_;
@@ -384,6 +387,15 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   if (o_.diagnostics) pictures_.WriteDiagnostics(out, pipeline_options_, f, in_.frames / 2);
   write_ += Seconds(t3, Clock::now());
   for (Detection& d : out.detections) detections_.push_back(std::move(d));
+  for (LaneBoundaryRow b : out.lanes.boundaries) {
+    b.frame = in_.ids[f], b.t_s = in_.times[f];
+    lanes_.push_back(b);
+  }
+  if (out.lanes.has_ego) {
+    EgoLaneRow e = out.lanes.ego;
+    e.frame = in_.ids[f], e.t_s = in_.times[f];
+    ego_lane_.push_back(e);
+  }
 }
 
 // Frame f's grid as grid/<frame>.png, with its row of grid.csv.
@@ -476,6 +488,10 @@ void DriveRun::WriteFiles() {
   pictures_.Close();
   WriteDetections(detections_, (tmp_ / "detections.csv").string());
   WriteTracks(tracks_, (tmp_ / "tracks.csv").string());
+  if (pipeline_options_.lanes) {
+    WriteLaneBoundaries(lanes_, (tmp_ / "lanes.csv").string());
+    WriteEgoLane(ego_lane_, (tmp_ / "ego_lane.csv").string());
+  }
   if (o_.grid_every > 0) {
     WriteFileAtomically((tmp_ / "grid" / "grid.csv").string(), grid_index_.str());
     s_.grid_every = o_.grid_every;

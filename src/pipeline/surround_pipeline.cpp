@@ -106,6 +106,7 @@ void PipelineOptions::Check() const {
   Require(vehicle_width_m >= 0, "vehicle_width_m", vehicle_width_m, ">= 0");
   front.Check();
   side.Check();
+  lane.Check();
 }
 
 namespace {
@@ -125,6 +126,7 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
     left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
     right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
   }
+  if (options.lanes) lanes_ = std::make_unique<LaneDetector>(rig, options.lane);
 }
 
 SurroundPipeline::~SurroundPipeline() = default;
@@ -168,10 +170,13 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
     tasks.push_back([&] { out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, continuing); });
     tasks.push_back([&] { out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, continuing); });
   }
+  if (lanes_) tasks.push_back([&] { out.lanes = lanes_->Detect(grey[0], grey[1]); });
   const std::vector<double> task_ms = RunTasks(tasks);
   front_->CombineReferences(&out.front);
   out.front_ms = front_views_ms + task_ms[0] + task_ms[1];
-  out.sides_ms = sides ? task_ms[tasks.size() - 2] + task_ms[tasks.size() - 1] : 0.0;
+  const size_t sides_end = tasks.size() - (lanes_ ? 1 : 0);
+  out.sides_ms = sides ? task_ms[sides_end - 2] + task_ms[sides_end - 1] : 0.0;
+  out.lanes_ms = lanes_ ? task_ms.back() : 0.0;
   out.detect_ms = ms(t0, now());
   Collect(in, sides, grey, &out);
   return out;

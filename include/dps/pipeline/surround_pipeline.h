@@ -13,6 +13,7 @@
 
 #include "dps/detect/coverage.h"
 #include "dps/detect/front_detection.h"
+#include "dps/detect/lane_detection.h"
 #include "dps/detect/side_detection.h"
 
 namespace dps {
@@ -21,6 +22,8 @@ struct PipelineOptions {
   FrontDetectorOptions front;
   SideDetectorOptions side;
   bool sides = true;           // run motion stereo on the side views
+  LaneDetectorOptions lane;
+  bool lanes = true;           // find the lane markings beside the car (lane_detection.h)
   double merge_distance_m = 1.5;  // detections this close are one object (FuseDetections)
   // Then parts that fit into one vehicle's footprint are one object (MergeVehicleParts);
   // vehicle_length_m = 0: no such merging.
@@ -59,13 +62,14 @@ struct FrameOutput {
   std::vector<Detection> detections;  // all sources, frame and t filled in
   FrontResult front;
   SideResult left, right;
+  LaneFrame lanes;             // the lane boundaries and the ego's lane position (frame, t unset)
   std::vector<std::string> warnings;
   // What this frame processed: the front pair's sector and each side's matched columns (none for a
   // side skipped); the occupancy grid marks free space only there.
   Coverage coverage;
   // Time spent per stage: the front pair's and both side pairs' work (the sources run
   // concurrently, so these may add up to more than detect_ms, their wall time).
-  double front_ms = 0.0, sides_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
+  double front_ms = 0.0, sides_ms = 0.0, lanes_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
 };
 
 class SurroundPipeline {
@@ -94,6 +98,7 @@ class SurroundPipeline {
   std::map<std::string, Eigen::Vector2d> viewpoints_;
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<SideDetector> left_, right_;
+  std::unique_ptr<LaneDetector> lanes_;
   cv::Mat previous_left_, previous_right_;  // the previous frame's omni images, grey
   double previous_t_s_ = 0.0;
   bool sides_last_ = false;  // the side detectors ran on the previous frame (Detect's `continuing`)

@@ -1,0 +1,69 @@
+// dps — lane markings beside the car and the ego's lateral position (the DPS map's lanes and LP,
+// seed 000 Fig. 1). Both cameras look down at the road beside the car, the best view of the
+// markings any camera on the car has: each frame the road around the car is resampled into a
+// bird's-eye view (each ground cell from the camera on its side, else the other; never where the
+// own car hides the road or outside the cameras' valid pixels); bright stripes between
+// min_marking_width_m and max_marking_width_m wide are marking evidence; straight lines
+// x = offset + tan(heading) z through it (offsets every cell, headings up to max_heading_deg) are
+// voted for, one vote per bird's-eye row, and the lines whose votes cover min_support of the rows
+// where they are seen are boundaries: the nearest on each side of the car is the ego lane's
+// (left, right), the next beyond at least min_lane_width_m out its neighbour's (left2, right2).
+// Each is refined by least squares on its evidence; solid when its evidence covers solid_support
+// of its rows. From left and right: the lateral position (lp), the lane's width and the heading;
+// a jump of lp by more than half a lane is a lane change (a "lane" wider than twice
+// min_lane_width_m is two, the line between them missed: no lp then).
+#pragma once
+
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "dps/camera/rig.h"
+#include "dps/util/lanes_csv.h"
+
+namespace dps {
+
+struct LaneDetectorOptions {
+  double cell_m = 0.05;              // bird's-eye cell, > 0
+  double lateral_m = 7.0;            // the view reaches this far left and right, > 0
+  double behind_m = 4.0;             // ... this far behind the vehicle origin and
+  double ahead_m = 10.0;             //     this far ahead, > 0
+  double min_marking_width_m = 0.08;  // stripes of this width ...
+  double max_marking_width_m = 0.3;   // ... up to this, > min
+  double max_heading_deg = 40.0;     // lines turned further from the car's axis are not sought, 0..60
+  double min_support = 0.15;         // share of its seen rows a boundary's evidence must cover, 0..1
+  double solid_support = 0.6;        // ... and a solid line's, 0..1
+  double min_lane_width_m = 2.5;     // the neighbour's outer boundary at least this beyond, > 0
+  double own_car_height_m = 1.0;     // ground hidden by the rig's vehicle box this high is not used
+
+  // Throws dps::Error naming the field, its value and the violated constraint.
+  void Check() const;
+};
+
+// One frame's lanes (frame and t left 0: the caller's).
+struct LaneFrame {
+  std::vector<LaneBoundaryRow> boundaries;
+  bool has_ego = false;  // both of the ego lane's boundaries found
+  EgoLaneRow ego;
+  cv::Mat birds_eye;     // CV_8U, the frame's bird's-eye view (+Z up, +X right), for pictures
+};
+
+class LaneDetector {
+ public:
+  // The rig's cameras (their masks, if any, limit the pixels); the views' tables are built here.
+  LaneDetector(const Rig& rig, const LaneDetectorOptions& options = {});
+
+  // Both cameras' grey images of one frame (the rig's cameras named left and right, else the first
+  // two); lane changes are judged against the previous call's lateral position.
+  LaneFrame Detect(const cv::Mat& left_grey, const cv::Mat& right_grey);
+
+ private:
+  LaneDetectorOptions options_;
+  int width_ = 0, height_ = 0;  // bird's-eye cells across and along
+  cv::Mat map_[2];              // CV_32FC2 per camera: the image pixel of each cell (-1: not seen)
+  cv::Mat use_[2];              // CV_8U: the cells taken from that camera
+  bool has_previous_ = false;
+  double previous_lp_ = 0.0;
+};
+
+}  // namespace dps

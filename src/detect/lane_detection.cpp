@@ -1,0 +1,258 @@
+#include "dps/detect/lane_detection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dps/camera/valid_mask.h"
+#include "dps/util/error.h"
+
+namespace dps {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// True when the segment from `o` to `p` passes through the box [lo, hi] (the own car).
+bool Hidden(const Eigen::Vector3d& o, const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const Eigen::Vector3d d = p - o;
+  double near = 0.0, far = 1.0;
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(d[k]) < 1e-12) {
+      if (o[k] < lo[k] || o[k] > hi[k]) return false;
+      continue;
+    }
+    double t0 = (lo[k] - o[k]) / d[k], t1 = (hi[k] - o[k]) / d[k];
+    if (t0 > t1) std::swap(t0, t1);
+    near = std::max(near, t0);
+    far = std::min(far, t1);
+  }
+  return near <= far;
+}
+
+// A line found in the bird's-eye view: x = offset + slope z (vehicle frame, metres).
+struct Line {
+  double offset = 0.0, slope = 0.0;
+  int votes = 0, seen_rows = 0;
+  double Support() const { return seen_rows > 0 ? static_cast<double>(votes) / seen_rows : 0.0; }
+};
+
+// Each row's stripe response: a cell's core mean less the brighter of the means just beyond the
+// widest marking on either side; NaN where any of it is not seen.
+cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDetectorOptions& o) {
+  const int core = std::max(0, static_cast<int>(std::lround(o.min_marking_width_m / o.cell_m / 2)));
+  const int beyond = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m / 2)), band = 2;
+  cv::Mat response(view.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  for (int r = 0; r < view.rows; ++r) {
+    const float* v = view.ptr<float>(r);
+    const std::uint8_t* ok = valid.ptr<std::uint8_t>(r);
+    // Prefix sums of the row and of its valid cells.
+    std::vector<double> sum(view.cols + 1, 0.0);
+    std::vector<int> seen(view.cols + 1, 0);
+    for (int c = 0; c < view.cols; ++c) sum[c + 1] = sum[c] + v[c], seen[c + 1] = seen[c] + (ok[c] != 0);
+    const auto mean = [&](int a, int b) { return (sum[b + 1] - sum[a]) / (b - a + 1); };
+    const auto whole = [&](int a, int b) { return seen[b + 1] - seen[a] == b - a + 1; };
+    for (int c = beyond + band; c < view.cols - beyond - band; ++c) {
+      if (!whole(c - beyond - band, c + beyond + band)) continue;
+      const double left = mean(c - beyond - band, c - beyond - 1), right = mean(c + beyond + 1, c + beyond + band);
+      response.ptr<float>(r)[c] = static_cast<float>(mean(c - core, c + core) - std::max(left, right));
+    }
+  }
+  return response;
+}
+
+// Evidence: responses far above the view's own (median + 4 robust sigmas, at least 1 grey level).
+cv::Mat Evidence(const cv::Mat& response) {
+  std::vector<float> v;
+  for (int r = 0; r < response.rows; ++r) {
+    for (int c = 0; c < response.cols; ++c) {
+      const float x = response.at<float>(r, c);
+      if (std::isfinite(x)) v.push_back(x);
+    }
+  }
+  cv::Mat evidence(response.size(), CV_8U, cv::Scalar(0));
+  if (v.size() < 100) return evidence;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  const float median = v[v.size() / 2];
+  for (float& x : v) x = std::abs(x - median);
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  const float threshold = median + std::max(1.0f, 4.0f * 1.4826f * v[v.size() / 2]);
+  for (int r = 0; r < response.rows; ++r) {
+    for (int c = 0; c < response.cols; ++c) evidence.at<std::uint8_t>(r, c) = response.at<float>(r, c) > threshold ? 255 : 0;
+  }
+  return evidence;
+}
+
+}  // namespace
+
+void LaneDetectorOptions::Check() const {
+  const OptionCheck Require("lane detector");
+  Require(cell_m > 0 && cell_m <= 1, "cell_m", cell_m, "0 < cell <= 1 m");
+  Require(lateral_m > 0 && lateral_m / cell_m <= 4096, "lateral_m", lateral_m, "> 0, at most 4096 cells");
+  Require(behind_m >= 0 && ahead_m > 0 && (behind_m + ahead_m) / cell_m <= 4096, "ahead_m", ahead_m,
+          "> 0, behind_m >= 0, at most 4096 cells in all");
+  Require(min_marking_width_m > 0 && min_marking_width_m < max_marking_width_m, "min_marking_width_m",
+          min_marking_width_m, "0 < min < max_marking_width_m");
+  Require(max_heading_deg >= 0 && max_heading_deg <= 60, "max_heading_deg", max_heading_deg, "0..60");
+  Require(min_support > 0 && min_support <= 1, "min_support", min_support, "0 < share <= 1");
+  Require(solid_support >= min_support && solid_support <= 1, "solid_support", solid_support, "min_support..1");
+  Require(min_lane_width_m > 0, "min_lane_width_m", min_lane_width_m, "> 0");
+  Require(own_car_height_m >= 0, "own_car_height_m", own_car_height_m, ">= 0");
+}
+
+LaneDetector::LaneDetector(const Rig& rig, const LaneDetectorOptions& options) : options_(options) {
+  options_.Check();
+  if (rig.cameras.size() < 2) throw Error("lane detector: the rig needs two cameras");
+  const RigCamera* cams[2] = {rig.Has("left") ? &rig.Camera("left") : &rig.cameras[0],
+                              rig.Has("right") ? &rig.Camera("right") : &rig.cameras[1]};
+  const LaneDetectorOptions& o = options_;
+  width_ = static_cast<int>(std::lround(2 * o.lateral_m / o.cell_m));
+  height_ = static_cast<int>(std::lround((o.ahead_m + o.behind_m) / o.cell_m));
+  const Eigen::Vector3d lo(-rig.vehicle.width_m / 2, -o.own_car_height_m, -rig.vehicle.length_m / 2);
+  const Eigen::Vector3d hi(rig.vehicle.width_m / 2, 0.0, rig.vehicle.length_m / 2);
+  cv::Mat seen[2];
+  for (int i = 0; i < 2; ++i) {
+    const RigCamera& cam = *cams[i];
+    const cv::Mat valid = CameraValidMask(cam);
+    const Pose camera_from_vehicle = cam.vehicle_from_camera.Inverse();
+    map_[i].create(height_, width_, CV_32FC2);
+    seen[i] = cv::Mat(height_, width_, CV_8U, cv::Scalar(0));
+    for (int r = 0; r < height_; ++r) {
+      for (int c = 0; c < width_; ++c) {
+        const Eigen::Vector3d p(-o.lateral_m + (c + 0.5) * o.cell_m, 0.0, o.ahead_m - (r + 0.5) * o.cell_m);
+        Eigen::Vector2d px;
+        map_[i].at<cv::Vec2f>(r, c) = cv::Vec2f(-1, -1);
+        if (Hidden(cam.vehicle_from_camera.t, p, lo, hi) || !cam.model.Project(camera_from_vehicle.Apply(p), &px) ||
+            !cam.model.InImage(px)) {
+          continue;
+        }
+        const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
+        if (u < 0 || v < 0 || u >= valid.cols || v >= valid.rows || !valid.at<std::uint8_t>(v, u)) continue;
+        map_[i].at<cv::Vec2f>(r, c) = cv::Vec2f(static_cast<float>(px.x()), static_cast<float>(px.y()));
+        seen[i].at<std::uint8_t>(r, c) = 255;
+      }
+    }
+  }
+  // Each cell from the camera on its side, else from the other.
+  for (int i = 0; i < 2; ++i) use_[i] = cv::Mat(height_, width_, CV_8U, cv::Scalar(0));
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const int own = (c < width_ / 2) ? 0 : 1, other = 1 - own;
+      if (seen[own].at<std::uint8_t>(r, c)) {
+        use_[own].at<std::uint8_t>(r, c) = 255;
+      } else if (seen[other].at<std::uint8_t>(r, c)) {
+        use_[other].at<std::uint8_t>(r, c) = 255;
+      }
+    }
+  }
+}
+
+LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_grey) {
+  const LaneDetectorOptions& o = options_;
+  cv::Mat view(height_, width_, CV_32F, cv::Scalar(0));
+  const cv::Mat* images[2] = {&left_grey, &right_grey};
+  for (int i = 0; i < 2; ++i) {
+    cv::Mat sampled;
+    cv::remap(*images[i], sampled, map_[i], cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    sampled.convertTo(sampled, CV_32F);
+    sampled.copyTo(view, use_[i]);
+  }
+  const cv::Mat valid = use_[0] | use_[1];
+  LaneFrame out;
+  view.convertTo(out.birds_eye, CV_8U);
+  const cv::Mat evidence = Evidence(StripeResponse(view, valid, o));
+  // Votes per (slope, offset cell), one per row and line.
+  const int slopes = 2 * static_cast<int>(std::ceil(o.max_heading_deg / 2.0)) + 1;
+  const auto slope_of = [&](int k) { return std::tan((k - slopes / 2) * 2.0 * kDeg); };
+  const auto z_of = [&](int r) { return o.ahead_m - (r + 0.5) * o.cell_m; };
+  std::vector<int> votes(static_cast<size_t>(slopes) * width_, 0);
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      if (!evidence.at<std::uint8_t>(r, c)) continue;
+      const double x = -o.lateral_m + (c + 0.5) * o.cell_m;
+      for (int k = 0; k < slopes; ++k) {
+        const int a = static_cast<int>(std::floor((x - slope_of(k) * z_of(r) + o.lateral_m) / o.cell_m));
+        if (a >= 0 && a < width_) ++votes[static_cast<size_t>(k) * width_ + a];
+      }
+    }
+  }
+  // Per offset cell its best slope; lines: local maxima over +-min_lane_width / 4 with support.
+  std::vector<Line> best(width_);
+  for (int a = 0; a < width_; ++a) {
+    for (int k = 0; k < slopes; ++k) {
+      const int n = votes[static_cast<size_t>(k) * width_ + a];
+      if (n > best[a].votes) best[a] = {-o.lateral_m + (a + 0.5) * o.cell_m, slope_of(k), n, 0};
+    }
+  }
+  const int suppress = std::max(1, static_cast<int>(o.min_lane_width_m / 4 / o.cell_m));
+  std::vector<Line> lines;
+  for (int a = 0; a < width_; ++a) {
+    if (best[a].votes == 0) continue;
+    bool peak = true;
+    for (int b = std::max(0, a - suppress); b <= std::min(width_ - 1, a + suppress) && peak; ++b) {
+      peak = b == a || best[b].votes < best[a].votes || (best[b].votes == best[a].votes && b > a);
+    }
+    if (!peak) continue;
+    Line l = best[a];
+    // Its rows where the view sees the road under it; then least squares on its evidence.
+    double sz = 0, sx = 0, szz = 0, szx = 0;
+    int n = 0;
+    for (int r = 0; r < height_; ++r) {
+      const double z = z_of(r), x = l.offset + l.slope * z;
+      const int c = static_cast<int>(std::floor((x + o.lateral_m) / o.cell_m));
+      if (c < 0 || c >= width_ || !valid.at<std::uint8_t>(r, c)) continue;
+      ++l.seen_rows;
+      const int reach = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m));
+      for (int d = std::max(0, c - reach); d <= std::min(width_ - 1, c + reach); ++d) {
+        if (!evidence.at<std::uint8_t>(r, d)) continue;
+        const double xd = -o.lateral_m + (d + 0.5) * o.cell_m;
+        sz += z, sx += xd, szz += z * z, szx += z * xd, ++n;
+      }
+    }
+    if (l.Support() < o.min_support || l.seen_rows * o.cell_m < 1.0) continue;
+    const double det = n * szz - sz * sz;
+    if (n >= 5 && std::abs(det) > 1e-9) {
+      l.slope = (n * szx - sz * sx) / det;
+      l.offset = (sx - l.slope * sz) / n;
+    }
+    lines.push_back(l);
+  }
+  // The ego lane's boundaries and its neighbours' outer ones.
+  const Line* left = nullptr;
+  const Line* right = nullptr;
+  for (const Line& l : lines) {
+    if (l.offset < 0 && (!left || l.offset > left->offset)) left = &l;
+    if (l.offset > 0 && (!right || l.offset < right->offset)) right = &l;
+  }
+  const Line* left2 = nullptr;
+  const Line* right2 = nullptr;
+  for (const Line& l : lines) {
+    if (left && l.offset < left->offset - o.min_lane_width_m && (!left2 || l.offset > left2->offset)) left2 = &l;
+    if (right && l.offset > right->offset + o.min_lane_width_m && (!right2 || l.offset < right2->offset)) right2 = &l;
+  }
+  const std::pair<const char*, const Line*> named[] = {{"left2", left2}, {"left", left}, {"right", right}, {"right2", right2}};
+  for (const auto& [name, l] : named) {
+    if (!l) continue;
+    const double length_m = l->votes * o.cell_m;
+    out.boundaries.push_back({0, 0.0, name, l->offset, std::atan(l->slope) / kDeg, 0.0,
+                              l->Support() >= o.solid_support ? "solid" : "dashed", std::min(1.0, length_m / 3.0)});
+  }
+  // A lane wider than two of the narrowest is two lanes with the line between them missed.
+  if (left && right && (right->offset - left->offset) <= 2 * o.min_lane_width_m) {
+    const double heading = std::atan((left->slope + right->slope) / 2);
+    out.has_ego = true;
+    out.ego.lp_m = -(left->offset + right->offset) / 2;
+    out.ego.lane_width_m = (right->offset - left->offset) * std::cos(heading);
+    out.ego.heading_deg = -heading / kDeg;
+    if (has_previous_ && std::abs(out.ego.lp_m - previous_lp_) > out.ego.lane_width_m / 2) {
+      out.ego.event = out.ego.lp_m > previous_lp_ ? "left" : "right";
+    }
+    has_previous_ = true;
+    previous_lp_ = out.ego.lp_m;
+  }
+  return out;
+}
+
+}  // namespace dps
