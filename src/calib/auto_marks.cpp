@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dps/calib/vanishing_points.h"
+#include "dps/camera/box.h"
 #include "dps/util/error.h"
 #include "dps/util/image.h"
 
@@ -23,24 +24,6 @@ struct Paint {
   Eigen::Vector3d ray;
   Eigen::Vector2d ground;
 };
-
-// Whether the ray from `o` along `d` (vehicle frame) meets the box [lo, hi] before the road.
-bool HitsBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
-             double road_t) {
-  double t0 = 0.0, t1 = road_t;
-  for (int i = 0; i < 3; ++i) {
-    if (std::abs(d[i]) < 1e-12) {
-      if (o[i] < lo[i] || o[i] > hi[i]) return false;
-      continue;
-    }
-    double a = (lo[i] - o[i]) / d[i], b = (hi[i] - o[i]) / d[i];
-    if (a > b) std::swap(a, b);
-    t0 = std::max(t0, a);
-    t1 = std::min(t1, b);
-    if (t0 > t1) return false;
-  }
-  return true;
-}
 
 std::vector<Paint> FindPaint(const cv::Mat& image, const Rig& rig, const RigCamera& cam, const AutoMarkOptions& o) {
   const cv::Mat grey = GreyImage(image);
@@ -65,7 +48,7 @@ std::vector<Paint> FindPaint(const cv::Mat& image, const Rig& rig, const RigCame
       if (!RayMeetsRoad(t, d, &g)) continue;  // at or above the horizon
       const double s = -t.y() / d.y();        // g = t + s d
       p.ground = Eigen::Vector2d(g.x() - t.x(), g.z() - t.z());
-      if (p.ground.norm() > o.max_range_m || HitsBox(t, d, lo, hi, s)) continue;
+      if (p.ground.norm() > o.max_range_m || RayMeetsBox(t, d, lo, hi, 0.0, s)) continue;
       paint.push_back(p);
     }
   }

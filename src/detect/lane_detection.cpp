@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "dps/camera/box.h"
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
 
@@ -14,23 +15,6 @@ namespace dps {
 namespace {
 
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
-
-// True when the segment from `o` to `p` passes through the box [lo, hi] (the own car).
-bool Hidden(const Eigen::Vector3d& o, const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  const Eigen::Vector3d d = p - o;
-  double near = 0.0, far = 1.0;
-  for (int k = 0; k < 3; ++k) {
-    if (std::abs(d[k]) < 1e-12) {
-      if (o[k] < lo[k] || o[k] > hi[k]) return false;
-      continue;
-    }
-    double t0 = (lo[k] - o[k]) / d[k], t1 = (hi[k] - o[k]) / d[k];
-    if (t0 > t1) std::swap(t0, t1);
-    near = std::max(near, t0);
-    far = std::min(far, t1);
-  }
-  return near <= far;
-}
 
 // A line found in the bird's-eye view: x = offset + slope z (vehicle frame, metres).
 struct Line {
@@ -124,7 +108,7 @@ LaneDetector::LaneDetector(const Rig& rig, const LaneDetectorOptions& options) :
         const Eigen::Vector3d p(-o.lateral_m + (c + 0.5) * o.cell_m, 0.0, o.ahead_m - (r + 0.5) * o.cell_m);
         Eigen::Vector2d px;
         map_[i].at<cv::Vec2f>(r, c) = cv::Vec2f(-1, -1);
-        if (Hidden(cam.vehicle_from_camera.t, p, lo, hi) || !cam.model.Project(camera_from_vehicle.Apply(p), &px) ||
+        if (RayMeetsBox(cam.vehicle_from_camera.t, p - cam.vehicle_from_camera.t, lo, hi, 0.0, 1.0) || !cam.model.Project(camera_from_vehicle.Apply(p), &px) ||
             !cam.model.InImage(px)) {
           continue;
         }

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 
+#include "dps/camera/box.h"
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
 
@@ -25,20 +26,8 @@ struct Box {
   }
   // True when the open segment a -> b (its ends excluded by a small margin) passes through the box.
   bool Blocks(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
-    const Eigen::Vector3d p = Local(a), d = Local(b) - p;
-    double lo = 1e-6, hi = 1.0 - 1e-6;
-    for (int k = 0; k < 3; ++k) {
-      if (std::abs(d[k]) < 1e-12) {
-        if (std::abs(p[k]) > half[k]) return false;
-        continue;
-      }
-      double t0 = (-half[k] - p[k]) / d[k], t1 = (half[k] - p[k]) / d[k];
-      if (t0 > t1) std::swap(t0, t1);
-      lo = std::max(lo, t0);
-      hi = std::min(hi, t1);
-      if (lo > hi) return false;
-    }
-    return true;
+    const Eigen::Vector3d p = Local(a);
+    return RayMeetsBox(p, Local(b) - p, -half, half, 1e-6, 1.0 - 1e-6);
   }
 };
 

@@ -8,6 +8,7 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "dps/camera/box.h"
 #include "dps/util/error.h"
 
 namespace dps {
@@ -165,21 +166,7 @@ cv::Mat OwnCarMask(const VirtualView& view, const Vehicle& vehicle, double heigh
   cv::Mat mask(s.height, s.width, CV_8U, cv::Scalar(0));
   for (int y = 0; y < s.height; ++y) {
     for (int x = 0; x < s.width; ++x) {
-      const Eigen::Vector3d d = view.RayVehicle(x, y);
-      double t0 = 0.0, t1 = 1e9;
-      bool hit = true;
-      for (int k = 0; k < 3 && hit; ++k) {
-        if (std::abs(d[k]) < 1e-12) {
-          hit = o[k] >= lo[k] && o[k] <= hi[k];
-          continue;
-        }
-        double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
-        if (a > b) std::swap(a, b);
-        t0 = std::max(t0, a);
-        t1 = std::min(t1, b);
-        hit = t0 <= t1;
-      }
-      if (hit) mask.at<std::uint8_t>(y, x) = 255;
+      if (RayMeetsBox(o, view.RayVehicle(x, y), lo, hi, 0.0, 1e9)) mask.at<std::uint8_t>(y, x) = 255;
     }
   }
   return mask;
