@@ -14,6 +14,8 @@ mkdir -p "$OUT"
 "$T/dps-process" "$OUT/drives/$SCENE" --out "$OUT/results" --force --map-png
 "$T/dps-eval" --detections "$OUT/results/$SCENE/detections.csv" --tracks "$OUT/results/$SCENE/tracks.csv" \
   --truth "$OUT/drives/$SCENE/truth.csv" \
+  --lanes "$OUT/results/$SCENE/lanes.csv" --truth-lanes "$OUT/drives/$SCENE/truth_lanes.csv" \
+  --ego-lane "$OUT/results/$SCENE/ego_lane.csv" --truth-ego-lane "$OUT/drives/$SCENE/truth_ego_lane.csv" \
   --rig "$OUT/drives/$SCENE/rig.yaml" --json "$OUT/results/$SCENE/scores.json" | tee "$OUT/results/$SCENE/scores.txt"
 echo
 echo "Drive (synthetic, with truth):  $OUT/drives/$SCENE/"
@@ -22,7 +24,7 @@ for v in map.mp4 map.avi; do
   if [ -f "$OUT/results/$SCENE/$v" ]; then VIDEO="$OUT/results/$SCENE/$v"; break; fi
 done
 echo "Surround map video:             $VIDEO   (frames: $OUT/results/$SCENE/map/)"
-echo "Detections / tracks:            $OUT/results/$SCENE/detections.csv, tracks.csv"
+echo "Detections / tracks / lanes:    $OUT/results/$SCENE/detections.csv, tracks.csv, lanes.csv, ego_lane.csv"
 head -n 4 "$OUT/results/$SCENE/detections.csv" | column -t -s, 2>/dev/null || head -n 4 "$OUT/results/$SCENE/detections.csv"
 echo "Scores (DESIGN.md §5):          $OUT/results/$SCENE/scores.txt, scores.json"
 echo "Other scenes: $0 overtaking | parked_cars | parked_left | left_turn | truck_far | empty_road"
