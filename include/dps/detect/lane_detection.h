@@ -60,7 +60,7 @@ class LaneDetector {
  private:
   LaneDetectorOptions options_;
   int width_ = 0, height_ = 0;  // bird's-eye cells across and along
-  cv::Mat map_[2];              // CV_32FC2 per camera: the image pixel of each cell (-1: not seen)
+  cv::Mat map_[2], fraction_[2];  // per camera: each cell's image pixel (remap's fixed point; -1: not seen)
   cv::Mat use_[2];              // CV_8U: the cells taken from that camera
   bool has_previous_ = false;
   double previous_lp_ = 0.0;
