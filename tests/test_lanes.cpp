@@ -156,7 +156,8 @@ void TestScores() {
   // A report of right2 after the change, where the road has no such line: a false report.
   std::vector<dps::LaneBoundaryRow> extra = truth.boundaries;
   extra.push_back({s.FrameCount() - 1, s.FrameTime(s.FrameCount() - 1), "right2", 5.0, 0.0, 0.0, "solid", 0.5});
-  CHECK_EQ(dps::EvaluateLanes(extra, truth.boundaries, {}, {}).boundaries[3].false_reports, 1);
+  const dps::LaneEvaluation with_extra = dps::EvaluateLanes(extra, truth.boundaries, {}, {});
+  CHECK_EQ(with_extra.boundaries[3].false_reports, 1);
   // The same change reported 0.5 s late is not found, and counts as invented.
   ego[truth_event_frame + 3].event.clear();
   ego[truth_event_frame + 8].event = "right";
