@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <string>
+#include <utility>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
