@@ -104,6 +104,20 @@ void TestTracksAndGrid() {
   CHECK(Count(map, Pixel(-3.0, 11.0), 2, Blue) > 0);  // the arrow's middle
   CHECK(Count(map, Pixel(-3.0, 14.0), 6, Blue) > 0);  // its head and the ellipse
   CHECK_EQ(Count(map, Pixel(3.0, 11.0), 10, Blue), 0);
+  // Lane boundaries: the right one 1.75 m out, solid, along the whole map; a dashed left one.
+  cv::Mat laned = background.clone();
+  dps::DrawLanes(laned, {{0, 0.0, "right", 1.75, 0.0, 0.0, "solid", 1.0}, {0, 0.0, "left", -1.75, 0.0, 0.0, "dashed", 1.0}},
+                 kMap);
+  const auto lane = [](const cv::Vec3b& p) { return p[1] > 140 && p[2] > 200 && p[0] < 60; };
+  int solid = 0, dashed = 0;
+  for (double z = -25.0; z <= 25.0; z += 1.0) {
+    solid += lane(laned.at<cv::Vec3b>(Pixel(1.75, z)));
+    dashed += lane(laned.at<cv::Vec3b>(Pixel(-1.75, z)));
+  }
+  std::printf("lanes on the map: the solid line in %d of 51 sampled metres, the dashed one in %d\n", solid, dashed);
+  CHECK(solid >= 48);
+  CHECK(dashed >= 12 && dashed <= 24);  // 3 m of every 9
+  CHECK(!lane(laned.at<cv::Vec3b>(Pixel(0.0, 10.0))));
   t.confirmed = false;  // tentative tracks are not drawn
   cv::Mat none = background.clone();
   dps::DrawTracks(none, {t}, kMap);

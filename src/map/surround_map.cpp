@@ -16,6 +16,7 @@ namespace {
 
 // The obstacles' colour, their nearest points', the tracks'.
 const cv::Scalar kObstacleColour(0, 0, 220), kNearestColour(0, 0, 120), kTrackColour(200, 80, 0);
+const cv::Scalar kLaneColour(0, 170, 230);
 
 // Vehicle-frame (x, z) to map pixels: the vehicle origin at the centre, +Z up.
 struct MapProjection {
@@ -35,7 +36,7 @@ constexpr double kShadeWeight = 0.7;
 cv::Scalar SectorShade(size_t k) { return kShades[k % 3] * kShadeWeight + cv::Scalar::all(255) * (1 - kShadeWeight); }
 
 // The legend's box at the bottom right (room for three sources; empty on maps too small for it).
-constexpr int kLegendLine = 14, kLegendLines = 10;
+constexpr int kLegendLine = 14, kLegendLines = 11;
 cv::Rect LegendRect(const cv::Size& map) {
   const int width = 190, height = kLegendLine * kLegendLines + 8;
   const cv::Rect box(map.width - width - 6, map.height - height - 6, width, height);
@@ -58,6 +59,7 @@ void DrawLegend(cv::Mat& map, const Coverage& coverage) {
   entries.push_back({kObstacleColour, "obstacle"});
   entries.push_back({kNearestColour, "its nearest point"});
   entries.push_back({kTrackColour, "track: id, prediction"});
+  entries.push_back({kLaneColour, "lane boundary"});
   entries.push_back({cv::Scalar::all(kGridOccupiedGrey), "grid: occupied"});
   entries.push_back({cv::Scalar(kGridFreeBlueRed, kGridFreeGreen, kGridFreeBlueRed), "grid: free"});
   entries.push_back({cv::Scalar(0, 0, 0), "own car"});
@@ -156,6 +158,20 @@ cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>&
   cv::Mat map = background.clone();
   DrawObstacles(map, detections, o, caption);
   return map;
+}
+
+void DrawLanes(cv::Mat& map, const std::vector<LaneBoundaryRow>& lanes, const MapOptions& o) {
+  const MapProjection to_px(o);
+  for (const LaneBoundaryRow& b : lanes) {
+    const double slope = std::tan(b.heading_deg * 3.14159265358979323846 / 180.0);
+    const int thickness = b.boundary == "left" || b.boundary == "right" ? 2 : 1;
+    // Dashes of 3 m every 9 m for dashed lines, one segment for solid ones.
+    const double step = b.type == "dashed" ? 9.0 : 2 * o.range_m, length = b.type == "dashed" ? 3.0 : 2 * o.range_m;
+    for (double z = -o.range_m; z < o.range_m; z += step) {
+      const double z1 = std::min(o.range_m, z + length);
+      cv::line(map, to_px(b.offset_m + slope * z, z), to_px(b.offset_m + slope * z1, z1), kLaneColour, thickness, cv::LINE_AA);
+    }
+  }
 }
 
 void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOptions& o) {

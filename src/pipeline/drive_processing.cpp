@@ -377,6 +377,7 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   if (o_.grid_every > 0 && f % o_.grid_every == 0) WriteGrid(f);
   if (pictures_.WantsMap()) {
     DrawFrameMap(map_background_, grid_, in_.rig.vehicle, out.detections, frame_tracks, o_.map, caption, map_);
+    DrawLanes(map_, out.lanes.boundaries, o_.map);
   }
   for (const TrackState& t : frame_tracks) {
     if (t.confirmed) tracks_.push_back(t);

@@ -13,6 +13,7 @@
 #include "dps/detect/detection.h"
 #include "dps/map/occupancy_grid.h"
 #include "dps/map/tracker.h"
+#include "dps/util/lanes_csv.h"
 
 namespace dps {
 
@@ -38,6 +39,10 @@ void DrawOwnCar(cv::Mat& map, const Vehicle& vehicle, const MapOptions& options)
 // paper's morphological smoothing, erring towards the car).
 cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections,
                         const MapOptions& options, const std::string& caption);
+
+// Draws lane boundaries (lane_detection.h) onto a map picture as straight lines over the map's
+// range, solid or dashed as they are; the ego lane's (left, right) thicker than its neighbours'.
+void DrawLanes(cv::Mat& map, const std::vector<LaneBoundaryRow>& lanes, const MapOptions& options);
 
 // Draws the confirmed tracks onto a map picture: id, an arrow to the position predicted ahead and
 // the 1-sigma ellipse of that prediction.
