@@ -30,12 +30,12 @@ cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDete
   const int core = std::max(0, static_cast<int>(std::lround(o.min_marking_width_m / o.cell_m / 2)));
   const int beyond = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m / 2)), band = 2;
   cv::Mat response(view.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  // Prefix sums of a row and of its valid cells.
+  std::vector<double> sum(view.cols + 1, 0.0);
+  std::vector<int> seen(view.cols + 1, 0);
   for (int r = 0; r < view.rows; ++r) {
     const float* v = view.ptr<float>(r);
     const std::uint8_t* ok = valid.ptr<std::uint8_t>(r);
-    // Prefix sums of the row and of its valid cells.
-    std::vector<double> sum(view.cols + 1, 0.0);
-    std::vector<int> seen(view.cols + 1, 0);
     for (int c = 0; c < view.cols; ++c) sum[c + 1] = sum[c] + v[c], seen[c + 1] = seen[c] + (ok[c] != 0);
     const auto mean = [&](int a, int b) { return (sum[b + 1] - sum[a]) / (b - a + 1); };
     const auto whole = [&](int a, int b) { return seen[b + 1] - seen[a] == b - a + 1; };
@@ -141,6 +141,9 @@ LaneDetector::LaneDetector(const Rig& rig, const LaneDetectorOptions& options) :
     cv::convertMaps(map_[i], cv::noArray(), fixed, fraction_[i], CV_16SC2);
     map_[i] = fixed;
   }
+  valid_ = use_[0] | use_[1];
+  const int slopes = 2 * static_cast<int>(std::ceil(o.max_heading_deg / 2.0)) + 1;
+  for (int k = 0; k < slopes; ++k) slopes_.push_back(std::tan((k - slopes / 2) * 2.0 * kDeg));
 }
 
 LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_grey) {
@@ -153,15 +156,12 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     sampled.convertTo(sampled, CV_32F);
     sampled.copyTo(view, use_[i]);
   }
-  const cv::Mat valid = use_[0] | use_[1];
+  const cv::Mat& valid = valid_;
   LaneFrame out;
-  view.convertTo(out.birds_eye, CV_8U);
   const cv::Mat evidence = Evidence(StripeResponse(view, valid, o));
   // Votes per (slope, offset cell), one per row and line.
-  const int slopes = 2 * static_cast<int>(std::ceil(o.max_heading_deg / 2.0)) + 1;
-  std::vector<double> slope(slopes);
-  for (int k = 0; k < slopes; ++k) slope[k] = std::tan((k - slopes / 2) * 2.0 * kDeg);
-  const auto slope_of = [&](int k) { return slope[k]; };
+  const int slopes = static_cast<int>(slopes_.size());
+  const auto slope_of = [&](int k) { return slopes_[k]; };
   const auto z_of = [&](int r) { return o.ahead_m - (r + 0.5) * o.cell_m; };
   std::vector<int> votes(static_cast<size_t>(slopes) * width_, 0);
   for (int r = 0; r < height_; ++r) {
@@ -197,12 +197,12 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     // Its rows where the view sees the road under it; then least squares on its evidence.
     double sz = 0, sx = 0, szz = 0, szx = 0;
     int n = 0;
+    const int reach = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m));
     for (int r = 0; r < height_; ++r) {
       const double z = z_of(r), x = l.offset + l.slope * z;
       const int c = static_cast<int>(std::floor((x + o.lateral_m) / o.cell_m));
       if (c < 0 || c >= width_ || !valid.at<std::uint8_t>(r, c)) continue;
       ++l.seen_rows;
-      const int reach = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m));
       for (int d = std::max(0, c - reach); d <= std::min(width_ - 1, c + reach); ++d) {
         if (!evidence.at<std::uint8_t>(r, d)) continue;
         const double xd = -o.lateral_m + (d + 0.5) * o.cell_m;

@@ -278,8 +278,8 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
     }
     frames_csv.Commit();
     WriteTruth(truth, (tmp / "truth.csv").string());
-    LaneTruth lanes = LaneTruthOf(scene);
     if (!calibration && scene.road.enabled) {
+      LaneTruth lanes = LaneTruthOf(scene);
       // The rendered frames only (--frames may cut the drive short).
       const auto rendered = [frames](const auto& row) { return row.frame >= frames; };
       lanes.boundaries.erase(std::remove_if(lanes.boundaries.begin(), lanes.boundaries.end(), rendered), lanes.boundaries.end());

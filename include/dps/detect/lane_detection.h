@@ -45,7 +45,6 @@ struct LaneFrame {
   std::vector<LaneBoundaryRow> boundaries;
   bool has_ego = false;  // both of the ego lane's boundaries found
   EgoLaneRow ego;
-  cv::Mat birds_eye;     // CV_8U, the frame's bird's-eye view (+Z up, +X right), for pictures
 };
 
 class LaneDetector {
@@ -62,6 +61,8 @@ class LaneDetector {
   int width_ = 0, height_ = 0;  // bird's-eye cells across and along
   cv::Mat map_[2], fraction_[2];  // per camera: each cell's image pixel (remap's fixed point; -1: not seen)
   cv::Mat use_[2];              // CV_8U: the cells taken from that camera
+  cv::Mat valid_;               // CV_8U: the cells either camera gives
+  std::vector<double> slopes_;  // the lines' slopes sought (tan of their headings)
   bool has_previous_ = false;
   double previous_lp_ = 0.0;
 };
