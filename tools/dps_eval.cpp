@@ -91,7 +91,9 @@ int main(int argc, char** argv) {
       options.visibility = std::make_shared<const dps::Visibility>(rig);
     }
     const std::vector<dps::TruthRow> truth = objects ? dps::ReadTruth(args.Get("truth")) : std::vector<dps::TruthRow>{};
-    std::string json, errors;
+    // The JSON parts: detections alone are written as their object; with tracks or lanes, an object
+    // holding each part (null where absent).
+    std::string detections_json = "null", tracks_json, lanes_json, errors;
     if (args.Has("detections")) {
       const std::vector<dps::Detection> detections = dps::ReadDetections(args.Get("detections"));
       std::vector<std::pair<int, double>> frames;
@@ -99,7 +101,7 @@ int main(int argc, char** argv) {
       dps::CheckSameDrive(frames, truth, args.Get("detections"), args.Get("truth"));
       const dps::EvaluationResult r = dps::Evaluate(detections, truth, options);
       std::cout << dps::EvaluationTable(r);
-      json = dps::EvaluationJson(r);
+      detections_json = dps::EvaluationJson(r);
       errors = dps::ScoringErrorsCsv(r);
     }
     if (args.Has("tracks")) {
@@ -111,8 +113,7 @@ int main(int argc, char** argv) {
       std::cout << "tracks:\n" << dps::EvaluationTable(r.positions);
       std::printf("velocity error median %.3f m/s; %d objects tracked, %d identity switches\n",
                   r.positions.overall.MedianVelocityError(), r.objects_tracked, r.id_switches);
-      json = "{\"detections\": " + (json.empty() ? std::string("null") : json) + ", \"tracks\": " +
-             dps::EvaluationJson(r.positions) + ", \"id_switches\": " + std::to_string(r.id_switches) + "}\n";
+      tracks_json = ", \"tracks\": " + dps::EvaluationJson(r.positions) + ", \"id_switches\": " + std::to_string(r.id_switches);
       if (errors.empty()) errors = dps::ScoringErrorsCsv(r.positions);
     }
     if (lanes) {
@@ -125,13 +126,14 @@ int main(int argc, char** argv) {
       const dps::LaneEvaluation e =
           dps::EvaluateLanes(read("lanes"), read("truth-lanes"), read_ego("ego-lane"), read_ego("truth-ego-lane"));
       std::cout << dps::LaneEvaluationTable(e);
-      const std::string objects_json = json.empty() ? "null" : json;
-      const bool combined = args.Has("tracks");  // already {"detections": ..., "tracks": ...}
-      json = combined ? objects_json.substr(0, objects_json.rfind('}')) + ", \"lanes\": " + dps::LaneEvaluationJson(e) + "}\n"
-                      : "{\"detections\": " + objects_json + ", \"tracks\": null, \"lanes\": " +
-                            dps::LaneEvaluationJson(e) + "}\n";
+      lanes_json = ", \"lanes\": " + dps::LaneEvaluationJson(e);
     }
-    if (args.Has("json")) dps::WriteFileAtomically(args.Get("json"), json);
+    if (args.Has("json")) {
+      const bool parts = !tracks_json.empty() || !lanes_json.empty();
+      const std::string tracks = tracks_json.empty() && !lanes_json.empty() ? ", \"tracks\": null" : tracks_json;
+      dps::WriteFileAtomically(args.Get("json"), parts ? "{\"detections\": " + detections_json + tracks + lanes_json + "}\n"
+                                                       : detections_json);
+    }
     if (args.Has("errors")) dps::WriteFileAtomically(args.Get("errors"), errors);
     return 0;
   });
