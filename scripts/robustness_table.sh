@@ -129,6 +129,7 @@ for size in sizes:
                        frames=d["frames"], frames_with=d["frames_with_detections"])
             for z in d.get("zones", []):
                 row["zone_" + z["band"]] = z["recall"] if z["objects"] else None
+            row["kinds"] = {k["band"]: (k["objects"], k["matched_objects"]) for k in d.get("kinds", [])}
             if t:
                 row.update(track_velocity=t["overall"]["velocity_error_median_mps"],
                            track_recall=t["overall"]["recall"] if t["overall"]["objects"] else None,
@@ -196,6 +197,18 @@ for size in sizes:
         g = [r for r in group if r["family"] == family]
         print(f"| {family} | {stats(g, 'zone_front')} | {stats(g, 'zone_side')} | {stats(g, 'zone_rear')} |")
     print()
+    kinds = sorted({k for r in group if not r["failed"] for k in r.get("kinds", {})})
+    if kinds:
+        print("Recall by the object's kind (object-frames of every drive pooled; the drives' medians):\n")
+        print("| kind | drives | object-frames | recall pooled | recall median / 10th percentile / worst |")
+        print("| --- | --- | --- | --- | --- |")
+        for kind in kinds:
+            g = [r for r in group if not r["failed"] and r.get("kinds", {}).get(kind, (0, 0))[0] > 0]
+            n = sum(r["kinds"][kind][0] for r in g)
+            m = sum(r["kinds"][kind][1] for r in g)
+            for r in g: r["kind_recall"] = r["kinds"][kind][1] / r["kinds"][kind][0]
+            print(f"| {kind} | {len(g)} | {n} | {fmt(m / n)} | {stats(g, 'kind_recall')} |")
+        print()
     print("By camera family (every scene but the empty roads):\n")
     print("| camera | drives | recall | precision | range error |")
     print("| --- | --- | --- | --- | --- |")

@@ -367,6 +367,17 @@ void TestEvaluation() {
   CHECK_EQ(r.zones[0].matched_detections, 1);
   CHECK_EQ(r.zones[1].detections, 2);
   CHECK_EQ(r.overall.objects, 3);
+  // By kind: a pole beside the side car, missed, is the only pole.
+  const dps::TruthRow pole{0, 0.0, 7, "pole", 4.0, 2.0, 0.0, 0.2, 0.2, 3.0, 0, 0};
+  r = dps::Evaluate(dets, {car, far, side, behind, pole}, o);
+  CHECK_EQ(r.kinds.size(), size_t{2});
+  CHECK(r.kinds[0].name == "car" && r.kinds[1].name == "pole");
+  CHECK_EQ(r.kinds[0].objects, 3);
+  CHECK_EQ(r.kinds[0].matched_objects, 2);
+  CHECK_EQ(r.kinds[1].objects, 1);
+  CHECK_EQ(r.kinds[1].matched_objects, 0);
+  CHECK(dps::EvaluationJson(r).find("\"kinds\": [{\"band\": \"car\", \"objects\": 3, \"matched_objects\": 2") !=
+        std::string::npos);
   // With a rig whose one camera looks ahead (below), the car behind is seen by no camera and does
   // not count; a detection matching it is still a true one.
   o.visibility = std::make_shared<const dps::Visibility>(ForwardCameraRig());

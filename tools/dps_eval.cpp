@@ -29,7 +29,8 @@ a true detection: it counts for precision, the object not for recall. A counted 
 unmatched may be matched by a detection outside the zone (its near point at 19.5 m, the detection
 at 20.3 m); such a detection is not counted for precision.
 Prints recall, precision and range errors per range band, per zone (front: near point ahead of
-the own car's front; rear: behind its back; side: between) and per source.
+the own car's front; rear: behind its back; side: between), recall per object kind (truth.csv's
+kind: car, truck, pole, wall, pedestrian, ...) and precision per source.
 
   --detections FILE   detections.csv
   --tracks FILE       tracks.csv: scored the same way on (x, z), plus the median velocity error

@@ -114,6 +114,15 @@ BandScore* BandOf(EvaluationResult* result, double range) {
   return nullptr;
 }
 
+BandScore* KindOf(EvaluationResult* result, const std::string& kind) {
+  for (BandScore& k : result->kinds) {
+    if (k.name == kind) return &k;
+  }
+  result->kinds.emplace_back();
+  result->kinds.back().name = kind;
+  return &result->kinds.back();
+}
+
 SourceScore* SourceOf(EvaluationResult* result, const std::string& name) {
   for (SourceScore& s : result->sources) {
     if (s.source == name) return &s;
@@ -157,15 +166,16 @@ void Match(FrameMatch* m) {
   }
 }
 
-// Recall and range errors of the counted objects, overall and by the band and zone of their near
-// point.
+// Recall and range errors of the counted objects, overall, by the band and zone of their near
+// point and by their kind.
 void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, EvaluationResult* result) {
   for (size_t i = 0; i < m.objects.size(); ++i) {
     const TruthRow& object = *m.objects[i];
     const Eigen::Vector2d near = NearPoint(object);
     const double range = near.norm();
     if (!m.matched_by[i]) result->errors.push_back({f, true, object.id, object.kind, near, range});
-    for (BandScore* b : {&result->overall, BandOf(result, range), ZoneOf(result, near.y(), vehicle_length_m)}) {
+    for (BandScore* b : {&result->overall, BandOf(result, range), ZoneOf(result, near.y(), vehicle_length_m),
+                         KindOf(result, object.kind)}) {
       if (!b) continue;
       ++b->objects;
       if (!m.matched_by[i]) continue;
@@ -307,6 +317,16 @@ std::string EvaluationTable(const EvaluationResult& r) {
   row(r.overall);
   out << "zone      objects  recall  detections  precision  range error median / p90 (m)\n";
   for (const BandScore& z : r.zones) row(z);
+  if (!r.kinds.empty()) {
+    out << "kind        objects  recall  range error median / p90 (m)\n";
+    for (const BandScore& k : r.kinds) {
+      char buf[160];
+      std::snprintf(buf, sizeof(buf), "%-10s  %7d  %6s  %s / %s\n", k.name.c_str(), k.objects,
+                    k.objects ? Number(k.Recall()).c_str() : "-", Number(k.MedianRangeError(), 2).c_str(),
+                    Number(k.RangeErrorP90(), 2).c_str());
+      out << buf;
+    }
+  }
   out << "source    detections  matched  precision\n";
   for (const SourceScore& s : r.sources) {
     char buf[120];
@@ -340,6 +360,11 @@ std::string EvaluationJson(const EvaluationResult& r) {
   for (size_t i = 0; i < r.zones.size(); ++i) {
     out << (i ? ", " : "");
     band(r.zones[i]);
+  }
+  out << "],\n  \"kinds\": [";
+  for (size_t i = 0; i < r.kinds.size(); ++i) {
+    out << (i ? ", " : "");
+    band(r.kinds[i]);
   }
   out << "],\n  \"sources\": [";
   for (size_t i = 0; i < r.sources.size(); ++i) {

@@ -83,6 +83,8 @@ struct EvaluationResult {
   std::vector<BandScore> bands;      // 0-10, 10-20, 20-30, 30-50 m (object near-point range)
   std::vector<BandScore> zones;      // front, side, rear (object near point; a false detection's point)
   std::vector<SourceScore> sources;  // front, left, right
+  std::vector<BandScore> kinds;      // recall and range errors by the objects' truth kind (car, pole, ...),
+                                     // in order of first appearance; detections are not split by kind
   int frames = 0;                    // frames with truth rows or detections
   int frames_with_detections = 0;    // frames with at least one detection in the zone
   std::vector<ScoringError> errors;  // by frame: missed objects, then false detections
