@@ -167,6 +167,9 @@ void MeasureMotion(const std::vector<Contact>& contacts, double baseline_m, doub
 SideDetectorOptions::SideDetectorOptions() {
   stereo = DetectionStereoOptions();
   stereo.min_disparity = -16;
+  // The road beside the car changes its disparity by B / H per row (baseline B, camera height H):
+  // the half-resolution level's windows span no more rows than the full level's.
+  stereo.coarse_same_rows = true;
   histogram.two_sided = true;
   histogram.min_columns = 10;  // nearby vehicles fill much of a side view; small blobs are road
 }

@@ -297,6 +297,15 @@ void KeepValidWindows(const cv::Mat& left_valid, const cv::Mat& right_valid, cv:
   });
 }
 
+// The options the half-resolution level matches with: the same, or with windows of half the rows
+// (coarse_same_rows). Its interest operator and valid-window test keep the full window: a window is
+// matched only where the usual coarse window has texture and lies wholly in the valid pixels.
+StereoOptions CoarseOptions(const StereoOptions& o) {
+  StereoOptions c = o;
+  if (o.coarse_same_rows) c.block_height = 2 * std::max(1, o.block_height / 4) + 1;
+  return c;
+}
+
 // The coarse level's disparity range: half the fine one's, rounded outwards.
 int HalfMin(const StereoOptions& o) { return static_cast<int>(std::floor(o.min_disparity / 2.0)); }
 int HalfCount(const StereoOptions& o) {
@@ -332,7 +341,7 @@ SadStereoMatcher::~SadStereoMatcher() = default;
 
 const cv::Mat& SadStereoMatcher::MatchLevel(const PreparedView& left, const PreparedView& right, int d_min, int n,
                                             int level, int first_column) {
-  const StereoOptions& o = options_;
+  const StereoOptions o = level == 0 ? options_ : CoarseOptions(options_);
   const cv::Mat &left_log = left.log[level], &right_log = right.log[level], &textured = left.textured[level];
   LevelBuffers& buf = ws_->levels[level];
   const int w = left_log.cols, h = left_log.rows;
@@ -511,7 +520,7 @@ cv::Mat SadStereoMatcher::Compute(const PreparedView& left, const PreparedView& 
   // Coarse level: half resolution, half the disparities, the same window (twice the area).
   const ColumnRange coarse_columns = MatchableColumns(w / 2, HalfMin(o), HalfCount(o), o.block_width);
   if (!o.two_levels || coarse_columns.hi - coarse_columns.lo < o.block_width ||
-      left.log[0].rows / 2 <= o.block_height) {
+      left.log[0].rows / 2 <= CoarseOptions(o).block_height) {
     return fine;
   }
   FillFromCoarse(MatchLevel(left, right, HalfMin(o), HalfCount(o), 1, first_column / 2), first_column, fine);

@@ -41,7 +41,7 @@ struct SideDetectorOptions {
   // The horizon's row as a fraction of the height: below it the view reaches 37 degrees down at
   // the defaults, so a camera 0.9 m high sees where objects 1.2 m away meet the road.
   double horizon_fraction = 0.35;
-  StereoOptions stereo;        // default: 64 disparities from -16 (overtaking vehicles)
+  StereoOptions stereo;        // default: 64 disparities from -16 (overtaking vehicles), coarse_same_rows
   HistogramOptions histogram;  // its range is the stereo range; scored two-sided
   double max_range_m = 40.0;   // points farther than this are dropped
   // ... and points deeper than this along the view's axis: motion stereo's depth error grows with

@@ -55,6 +55,12 @@ struct StereoOptions {
   bool left_right_check = true;    // reject pixels whose right-image match disagrees
   double left_right_max_diff = 1.0;  // px, >= 0
   bool two_levels = true;          // fill invalid pixels from a half-resolution level
+  // The half-resolution level's matching windows as tall as the full level's in image rows (half
+  // as many of its own rows, at least 3) instead of twice as tall: for views where the road's
+  // disparity changes along the rows (a side view looking down at the road beside the car), so that
+  // a window spans no more of that change than at full resolution. Its interest operator still
+  // judges the usual (twice as tall) window.
+  bool coarse_same_rows = false;
   bool subpixel = true;            // equiangular (V) refinement
   // The kernel built for the baseline instruction set even where the CPU runs the AVX2 one (both
   // give the same disparities; for comparisons and benchmarks).
