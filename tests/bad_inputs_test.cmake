@@ -243,7 +243,12 @@ bad(truth_columns "truth_bad.csv: missing column" "-" "${TOOLS}/dps-eval" --dete
 file(WRITE "${WORK}/lanes_bad.csv" "frame,t,boundary,offset,heading_deg,curvature,type,confidence\n0,0,middle,0,0,0,solid,1\n")
 bad(lanes_boundary "lanes_bad.csv:2: column 'boundary': 'middle' is not one of left2, left, right, right2" "-"
     "${TOOLS}/dps-eval" --lanes "${WORK}/lanes_bad.csv" --truth-lanes "${WORK}/lanes_bad.csv")
-bad(lanes_alone "--lanes and --truth-lanes go together" "-" "${TOOLS}/dps-eval" --lanes "${WORK}/lanes_bad.csv")
+bad(lanes_alone "--lanes needs --truth-lanes" "-" "${TOOLS}/dps-eval" --lanes "${WORK}/lanes_bad.csv")
+bad(truth_lanes_alone "missing --detections, --tracks or --lanes" "-" "${TOOLS}/dps-eval"
+    --truth-lanes "${WORK}/lanes_bad.csv")
+file(WRITE "${WORK}/det_class.csv" "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points,height,lane,class\n0,0,front,0,0,5,5,-1,1,4,6,10,1.5,0,lorry\n")
+bad(detections_class "det_class.csv:2: column 'class': 'lorry' is not one of" "-" "${TOOLS}/dps-eval" --detections
+    "${WORK}/det_class.csv" --truth "${WORK}/good/truth.csv")
 bad(stereo_disparities "num_disparities" "${WORK}/disp.pfm" "${TOOLS}/dps-stereo" "${WORK}/good/left/000000.png"
     "${WORK}/good/right/000000.png" --num-disparities 2147483647 --out "${WORK}/disp.pfm")
 bad(stereo_missing "absent.png" "${WORK}/disp.pfm" "${TOOLS}/dps-stereo" "${WORK}/absent.png"

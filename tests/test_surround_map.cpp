@@ -118,6 +118,32 @@ void TestTracksAndGrid() {
   CHECK(solid >= 48);
   CHECK(dashed >= 12 && dashed <= 24);  // 3 m of every 9
   CHECK(!lane(laned.at<cv::Vec3b>(Pixel(0.0, 10.0))));
+  // The label with class and lane ("vehicle L-1") reaches further right than the id alone.
+  const auto label_pixels = [&](const dps::TrackState& s) {
+    cv::Mat m = background.clone();
+    dps::DrawTracks(m, {s}, kMap);
+    const cv::Point at = Pixel(s.x_m, s.z_m);
+    int n = 0;
+    for (int y = at.y - 20; y < at.y; ++y) {
+      for (int x = at.x + 30; x < std::min(m.cols, at.x + 120); ++x) n += Blue(m.at<cv::Vec3b>(y, x));
+    }
+    return n;
+  };
+  dps::TrackState labelled = t;
+  labelled.object_class = "vehicle";
+  labelled.lane = -1;
+  CHECK(label_pixels(labelled) > label_pixels(t) + 20);
+  // The ego's lane position under the caption, in the lane colour.
+  cv::Mat ego = background.clone();
+  dps::EgoLaneRow row;
+  row.lp_m = 0.12;
+  row.lane_width_m = 3.5;
+  dps::DrawEgoLane(ego, row);
+  int ego_text = 0;
+  for (int y = 28; y < 44; ++y) {
+    for (int x = 10; x < 300; ++x) ego_text += lane(ego.at<cv::Vec3b>(y, x));
+  }
+  CHECK(ego_text > 50);
   t.confirmed = false;  // tentative tracks are not drawn
   cv::Mat none = background.clone();
   dps::DrawTracks(none, {t}, kMap);

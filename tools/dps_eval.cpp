@@ -30,7 +30,9 @@ unmatched may be matched by a detection outside the zone (its near point at 19.5
 at 20.3 m); such a detection is not counted for precision.
 Prints recall, precision and range errors per range band, per zone (front: near point ahead of
 the own car's front; rear: behind its back; side: between), recall per object kind (truth.csv's
-kind: car, truck, pole, wall, pedestrian, ...) and precision per source.
+kind: car, truck, pole, wall, pedestrian, ...), precision per source, and for the matches with a
+class column the share whose class fits their object's kind (car: vehicle; truck, bus: truck;
+pedestrian, cyclist, motorbike: pedestrian; pole, post: pole; others: unknown).
 
   --detections FILE   detections.csv
   --tracks FILE       tracks.csv: scored the same way on (x, z), plus the median velocity error
@@ -47,6 +49,8 @@ kind: car, truck, pole, wall, pedestrian, ...) and precision per source.
                       truth_lanes.csv): per boundary the share of the truth's frames where it was
                       reported, the offset error there (median / 90th percentile) and reports of
                       boundaries the truth does not have
+  --truth-lanes FILE  with --detections or --tracks also: the share of matches whose lane (the
+                      lane column) is their object's (its footprint centre among these boundaries)
   --ego-lane FILE     ego_lane.csv, against --truth-ego-lane: the lateral position error, lane
                       changes found within 0.3 s (same direction) and invented
   --json FILE         also write the scores as JSON (with lanes: {"detections", "tracks", "lanes"})
@@ -71,12 +75,15 @@ int main(int argc, char** argv) {
       return 0;
     }
     const bool lanes = args.Has("lanes") || args.Has("ego-lane");
-    if (args.Has("lanes") != args.Has("truth-lanes")) throw dps::Error("--lanes and --truth-lanes go together (see --help)");
+    if (args.Has("lanes") && !args.Has("truth-lanes")) throw dps::Error("--lanes needs --truth-lanes (see --help)");
     if (args.Has("ego-lane") != args.Has("truth-ego-lane")) {
       throw dps::Error("--ego-lane and --truth-ego-lane go together (see --help)");
     }
     const bool objects = args.Has("detections") || args.Has("tracks");
     if (!objects && !lanes) throw dps::Error("missing --detections, --tracks or --lanes (see --help)");
+    if (args.Has("truth-lanes") && !args.Has("lanes") && !objects) {
+      throw dps::Error("--truth-lanes needs --lanes, --detections or --tracks (see --help)");
+    }
     if (objects && !args.Has("truth")) throw dps::Error("missing --truth (see --help)");
     dps::EvaluationOptions options;
     options.max_range_m = args.Number("max-range", 20.0);
@@ -90,6 +97,11 @@ int main(int argc, char** argv) {
         }
       }
       options.visibility = std::make_shared<const dps::Visibility>(rig);
+    }
+    if (objects && args.Has("truth-lanes")) {
+      for (dps::LaneBoundaryRow& b : dps::ReadLaneBoundaries(args.Get("truth-lanes"))) {
+        options.truth_lanes[b.frame].push_back(std::move(b));
+      }
     }
     const std::vector<dps::TruthRow> truth = objects ? dps::ReadTruth(args.Get("truth")) : std::vector<dps::TruthRow>{};
     // The JSON parts: detections alone are written as their object; with tracks or lanes, an object

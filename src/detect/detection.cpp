@@ -51,6 +51,8 @@ Detection Merged(const Detection& a, const Detection& b) {
   m.t_s = a.t_s;
   m.clipped_ends = a.clipped_ends;
   m.clipped_ends.insert(m.clipped_ends.end(), b.clipped_ends.begin(), b.clipped_ends.end());
+  // The higher top of the two (either may have seen only part of the object).
+  m.height_m = std::isnan(a.height_m) ? b.height_m : std::isnan(b.height_m) ? a.height_m : std::max(a.height_m, b.height_m);
   // The motion measurement of the part with more points (only motion stereo has one).
   const Detection* motion = a.has_motion && (!b.has_motion || a.n_points >= b.n_points) ? &a : b.has_motion ? &b : nullptr;
   if (motion) {

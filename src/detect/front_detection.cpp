@@ -254,6 +254,23 @@ bool FrontDetector::Linked(const VirtualView& view, const FrontMatch& m, const c
            std::abs(TopHeight(view, m, labels, a) - TopHeight(view, m, labels, b)) > options_.link_max_top_difference_m);
 }
 
+// The component's height: per column its rows times B / d (rows ~ height x d / B), the height
+// three quarters of the columns reach.
+double FrontDetector::ComponentHeight(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const {
+  std::vector<double> heights;
+  for (int x = c.x_begin; x < c.x_end; ++x) {
+    const float d = c.column_disparity[x - c.x_begin];
+    if (!std::isfinite(d) || d <= 0) continue;
+    int rows = 0;
+    for (int y = 0; y < m.disparity.rows; ++y) rows += InComponent(m, labels, c.label, x, y);
+    heights.push_back(rows * baseline_m_ / d);
+  }
+  if (heights.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t k = heights.size() / 4;
+  std::nth_element(heights.begin(), heights.begin() + k, heights.end(), std::greater<double>());
+  return heights[k];
+}
+
 // An obstacle stands up from the road: in each column it fills many rows with its disparity
 // (rows ~ height * d / B). Flat things (lane markings, road matched wrongly) and stray matches
 // fill few. Height per column = contributing rows * B / d; the component's is the median.
@@ -274,7 +291,7 @@ bool FrontDetector::StandsUp(const VirtualView& view, const FrontMatch& m, const
 }
 
 void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, std::pair<int, int> valid_columns,
-                         Reference& ref, FrontMatch* m) const {
+                         Reference& ref, FrontMatch* m, const cv::Mat& labels) const {
   // The outermost half window of columns is foreground fattening, not the object.
   const auto [from, to] = ProjectedColumns(c, options_.stereo.block_width / 2);
   std::vector<Eigen::Vector2d> points;
@@ -299,6 +316,7 @@ void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, s
     if (row >= 0 && row < m->obstacle.rows) m->obstacle.at<float>(row, x) = d;
   }
   Detection det = DetectionFromPoints(points, "front");
+  det.height_m = ComponentHeight(*m, labels, c);
   const int margin = options_.stereo.block_width;
   if (c.x_begin <= valid_columns.first + margin) det.clipped_ends.push_back(points.front());
   if (c.x_end - 1 >= valid_columns.second - margin) det.clipped_ends.push_back(points.back());
@@ -324,7 +342,7 @@ void FrontDetector::DetectWith(Reference& ref, FrontMatch* m) {
   ref.beyond.clear();
   const std::pair<int, int> valid = ValidColumns(m->disparity);
   for (const HistogramComponent& c : components) {
-    if (StandsUp(view, *m, labels, c)) Keep(view, c, valid, ref, m);
+    if (StandsUp(view, *m, labels, c)) Keep(view, c, valid, ref, m, labels);
   }
 }
 

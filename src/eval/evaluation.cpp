@@ -1,5 +1,6 @@
 #include "dps/eval/evaluation.h"
 
+#include "dps/detect/object_attributes.h"
 #include "dps/map/tracker.h"
 #include "dps/util/error.h"
 
@@ -189,11 +190,27 @@ void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, Evaluatio
   }
 }
 
+// A match's class and lane against its object's.
+void ScoreAttributes(const Detection& d, const TruthRow& object, const std::vector<LaneBoundaryRow>* lanes,
+                     EvaluationResult* result) {
+  if (!d.object_class.empty()) {
+    ++result->classes.judged;
+    result->classes.correct += d.object_class == ExpectedClass(object.kind);
+  }
+  const std::optional<int> lane = lanes ? LaneOfPoint(*lanes, {object.x_m, object.z_m}) : std::nullopt;
+  if (lane) {
+    ++result->lanes.judged;
+    result->lanes.correct += d.lane == lane;
+  }
+}
+
 // Precision of the detections in the zone, overall, by band and zone (of their object's near
-// point, or their own point when false) and by source.
-void ScoreDetections(int f, const FrameMatch& m, double vehicle_length_m, EvaluationResult* result) {
+// point, or their own point when false) and by source; the matches' attributes.
+void ScoreDetections(int f, const FrameMatch& m, double vehicle_length_m, const std::vector<LaneBoundaryRow>* lanes,
+                     EvaluationResult* result) {
   for (size_t j = 0; j < m.dets.size(); ++j) {
     const Detection& d = *m.dets[j];
+    if (m.det_match[j] >= 0) ScoreAttributes(d, *m.objects[m.det_match[j]], lanes, result);
     const Eigen::Vector2d point =
         m.det_match[j] >= 0 ? NearPoint(*m.objects[m.det_match[j]]) : Eigen::Vector2d(d.x_m, d.z_m);
     const double range = m.det_match[j] >= 0 ? point.norm() : d.range_m;
@@ -235,7 +252,8 @@ EvaluationResult EvaluateCounted(const std::vector<Detection>& detections, const
     if (!m.dets.empty()) ++result.frames_with_detections;
     Match(&m);
     ScoreObjects(f, m, length, &result);
-    ScoreDetections(f, m, length, &result);
+    const auto lanes = options.truth_lanes.find(f);
+    ScoreDetections(f, m, length, lanes == options.truth_lanes.end() ? nullptr : &lanes->second, &result);
   }
   return result;
 }
@@ -248,6 +266,16 @@ double BandScore::MedianRangeError() const { return Quantile(range_errors_m, 0.5
 double BandScore::RangeErrorP90() const { return Quantile(range_errors_m, 0.9); }
 double BandScore::MedianRelativeRangeError() const { return Quantile(relative_errors, 0.5); }
 double BandScore::MedianVelocityError() const { return Quantile(velocity_errors_mps, 0.5); }
+double AttributeScore::Accuracy() const { return judged ? double(correct) / judged : std::nan(""); }
+
+std::string ExpectedClass(const std::string& kind) {
+  if (kind == "car") return "vehicle";
+  if (kind == "truck" || kind == "bus") return "truck";
+  if (kind == "pedestrian" || kind == "cyclist" || kind == "motorbike") return "pedestrian";
+  if (kind == "pole" || kind == "post") return "pole";
+  return "unknown";
+}
+
 double SourceScore::Precision() const { return detections ? double(matched) / detections : 1.0; }
 
 EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
@@ -268,6 +296,9 @@ TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std:
     d.has_velocity = true;
     d.vx_mps = t.vx_mps;
     d.vz_mps = t.vz_mps;
+    d.height_m = t.height_m;
+    d.lane = t.lane;
+    d.object_class = t.object_class;
     as_detections.push_back(d);
   }
   options.Check();
@@ -335,6 +366,14 @@ std::string EvaluationTable(const EvaluationResult& r) {
     out << buf;
   }
   out << "frames " << r.frames << ", with a detection in the zone " << r.frames_with_detections << "\n";
+  if (r.classes.judged) {
+    out << "class right for " << r.classes.correct << " of " << r.classes.judged << " matches ("
+        << Number(r.classes.Accuracy()) << ")\n";
+  }
+  if (r.lanes.judged) {
+    out << "lane right for " << r.lanes.correct << " of " << r.lanes.judged << " matches with a true lane ("
+        << Number(r.lanes.Accuracy()) << ")\n";
+  }
   return out.str();
 }
 
@@ -372,8 +411,12 @@ std::string EvaluationJson(const EvaluationResult& r) {
     out << (i ? ", " : "") << "{\"source\": \"" << s.source << "\", \"detections\": " << s.detections
         << ", \"matched\": " << s.matched << ", \"precision\": " << Number(s.Precision(), 4) << "}";
   }
-  out << "],\n  \"frames\": " << r.frames << ",\n  \"frames_with_detections\": " << r.frames_with_detections
-      << "\n}\n";
+  out << "],\n  \"frames\": " << r.frames << ",\n  \"frames_with_detections\": " << r.frames_with_detections;
+  for (const auto& [name, a] : {std::make_pair("classes", &r.classes), std::make_pair("lanes", &r.lanes)}) {
+    out << ",\n  \"" << name << "\": {\"judged\": " << a->judged << ", \"correct\": " << a->correct
+        << ", \"accuracy\": " << Number(a->Accuracy(), 4) << "}";
+  }
+  out << "\n}\n";
   return out.str();
 }
 

@@ -3,6 +3,7 @@
 #include "dps/util/error.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
@@ -58,8 +59,8 @@ void DrawLegend(cv::Mat& map, const Coverage& coverage) {
   entries.push_back({cv::Scalar::all(255), "not measured"});
   entries.push_back({kObstacleColour, "obstacle"});
   entries.push_back({kNearestColour, "its nearest point"});
-  entries.push_back({kTrackColour, "track: id, prediction"});
-  entries.push_back({kLaneColour, "lane boundary"});
+  entries.push_back({kTrackColour, "track: id class lane"});
+  entries.push_back({kLaneColour, "lane boundary, ego LP"});
   entries.push_back({cv::Scalar::all(kGridOccupiedGrey), "grid: occupied"});
   entries.push_back({cv::Scalar(kGridFreeBlueRed, kGridFreeGreen, kGridFreeBlueRed), "grid: free"});
   entries.push_back({cv::Scalar(0, 0, 0), "own car"});
@@ -174,6 +175,13 @@ void DrawLanes(cv::Mat& map, const std::vector<LaneBoundaryRow>& lanes, const Ma
   }
 }
 
+void DrawEgoLane(cv::Mat& map, const EgoLaneRow& ego) {
+  char text[96];
+  std::snprintf(text, sizeof(text), "LP %+.2f m in a %.2f m lane, heading %+.1f deg", ego.lp_m, ego.lane_width_m,
+                ego.heading_deg);
+  cv::putText(map, text, cv::Point(10, 40), cv::FONT_HERSHEY_SIMPLEX, 0.45, kLaneColour, 1, cv::LINE_AA);
+}
+
 void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOptions& o) {
   const MapProjection to_px(o);
   for (const TrackState& t : tracks) {
@@ -187,8 +195,11 @@ void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOp
                         std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(0))) * to_px.scale)));
     cv::ellipse(map, ahead, axes, angle, 0, 360, cv::Scalar(200, 120, 0), 1, cv::LINE_AA);
     cv::arrowedLine(map, at, ahead, kTrackColour, 2, cv::LINE_AA, 0, 0.2);
-    cv::putText(map, std::to_string(t.id), at + cv::Point(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45, kTrackColour, 1,
-                cv::LINE_AA);
+    // Id, class and lane (object_attributes.h), e.g. "7 vehicle L-1".
+    std::string label = std::to_string(t.id);
+    if (!t.object_class.empty() && t.object_class != "unknown") label += " " + t.object_class;
+    if (t.lane) label += " L" + std::string(*t.lane > 0 ? "+" : "") + std::to_string(*t.lane);
+    cv::putText(map, label, at + cv::Point(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.45, kTrackColour, 1, cv::LINE_AA);
   }
 }
 

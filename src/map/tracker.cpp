@@ -384,6 +384,21 @@ void AddExtent(const Detection& d, const Eigen::Matrix2d& Rwv,
   if (extents->size() > kKept) extents->erase(extents->begin());
 }
 
+// Keeps a hit's measured height (the last 30 measured).
+void AddHeight(const Detection& d, std::vector<double>* heights) {
+  constexpr size_t kKept = 30;
+  if (std::isnan(d.height_m)) return;
+  heights->push_back(d.height_m);
+  if (heights->size() > kKept) heights->erase(heights->begin());
+}
+
+double HeightOf(std::vector<double> heights) {
+  if (heights.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t at = static_cast<size_t>(0.8 * (heights.size() - 1) + 0.5);
+  std::nth_element(heights.begin(), heights.begin() + at, heights.end());
+  return heights[at];
+}
+
 }  // namespace
 
 // Updates the tracks with their detections (the others count a miss) and drops the lost ones;
@@ -416,6 +431,7 @@ std::vector<bool> Tracker::UpdateTracks(double t_s, const std::vector<Detection>
     ApplyMotion(detections[j], Rwv, options_.motion_gate_chi2, &t);
     ApplyRegistration(t_s, ms.points[j], !ms.clipped_ends[j].empty(), Rwv, &t);
     AddExtent(detections[j], Rwv, &t.extents);
+    AddHeight(detections[j], &t.heights);
     ++t.hits;
     t.misses = 0;
     if (t.hits >= options_.confirm_hits) t.confirmed = true;
@@ -445,6 +461,7 @@ void Tracker::StartTracks(double t_s, const std::vector<Detection>& detections, 
     ApplyMotion(detections[j], Rwv, std::numeric_limits<double>::infinity(), &t);
     ApplyRegistration(t_s, m.points[j], !m.clipped_ends[j].empty(), Rwv, &t);
     AddExtent(detections[j], Rwv, &t.extents);
+    AddHeight(detections[j], &t.heights);
     t.hits = 1;
     t.confirmed = options_.confirm_hits <= 1;
     tracks_.push_back(t);
@@ -475,6 +492,7 @@ std::vector<TrackState> Tracker::Report(int frame, double t_s, const PlanarPose&
     const Eigen::Vector2d size = SizeOf(t.extents, Axis(t, Rwv));
     s.length_m = size.x();
     s.width_m = size.y();
+    s.height_m = HeightOf(t.heights);
     s.confirmed = t.confirmed;
     // Prediction ahead, in the current vehicle frame (the ego's own motion is not predicted).
     const double h = options_.predict_ahead_s;

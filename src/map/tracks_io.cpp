@@ -1,5 +1,6 @@
 #include "dps/map/tracks_io.h"
 
+#include "dps/detect/object_attributes.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/csv.h"
 
@@ -8,12 +9,12 @@ namespace dps {
 void WriteTracks(const std::vector<TrackState>& tracks, const std::string& path) {
   AtomicOutputFile out(path);
   out.stream().precision(6);
-  out.stream() << std::fixed << "frame,t,track,x,z,vx,vz,sigma_x,sigma_z,age,length,width\n";
+  out.stream() << std::fixed << "frame,t,track,x,z,vx,vz,sigma_x,sigma_z,age,length,width,height,lane,class\n";
   for (const TrackState& t : tracks) {
     if (!t.confirmed) continue;
     out.stream() << t.frame << "," << t.t_s << "," << t.id << "," << t.x_m << "," << t.z_m << "," << t.vx_mps << ","
                  << t.vz_mps << "," << t.sigma_x_m << "," << t.sigma_z_m << "," << t.age << "," << t.length_m << ","
-                 << t.width_m << "\n";
+                 << t.width_m << "," << AttributeCells(t.height_m, t.lane, t.object_class) << "\n";
   }
   out.Commit();
 }
@@ -26,6 +27,7 @@ std::vector<TrackState> ReadTracks(const std::string& path) {
   // Extra columns (not in DESIGN.md §3.5; files of other writers may lack them).
   const int length = t.HasColumn("length") ? t.Column("length") : -1;
   const int width = t.HasColumn("width") ? t.Column("width") : -1;
+  const AttributeColumns attributes(t);
   std::vector<TrackState> out;
   for (size_t r = 0; r < t.rows(); ++r) {
     TrackState s;
@@ -41,6 +43,7 @@ std::vector<TrackState> ReadTracks(const std::string& path) {
     s.age = t.Integer(r, age);
     if (length >= 0) s.length_m = t.Number(r, length);
     if (width >= 0) s.width_m = t.Number(r, width);
+    ReadAttributes(t, r, attributes, &s.height_m, &s.lane, &s.object_class);
     s.confirmed = true;
     out.push_back(s);
   }

@@ -369,7 +369,12 @@ class DriveRun {
 // writing. It runs alongside the next frame's stereo (SurroundPipeline::Process), in order.
 void DriveRun::Finish(FrameOutput& out, int f) {
   auto t2 = Clock::now();
-  const std::vector<TrackState> frame_tracks = tracker_.Update(in_.ids[f], in_.times[f], ego_, out.detections);
+  std::vector<TrackState> frame_tracks = tracker_.Update(in_.ids[f], in_.times[f], ego_, out.detections);
+  for (TrackState& t : frame_tracks) {
+    t.lane = LaneOfPoint(out.lanes.boundaries, {t.x_m, t.z_m});
+    t.object_class = ObjectClassName(
+        ClassifyObject(std::max(t.length_m, t.width_m), std::min(t.length_m, t.width_m), t.height_m, pipeline_options_.classes));
+  }
   char caption[128];
   std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), in_.ids[f], in_.times[f],
                 out.detections.size());
@@ -378,6 +383,7 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   if (pictures_.WantsMap()) {
     DrawFrameMap(map_background_, grid_, in_.rig.vehicle, out.detections, frame_tracks, o_.map, caption, map_);
     DrawLanes(map_, out.lanes.boundaries, o_.map);
+    if (out.lanes.has_ego) DrawEgoLane(map_, out.lanes.ego);
   }
   for (const TrackState& t : frame_tracks) {
     if (t.confirmed) tracks_.push_back(t);

@@ -107,6 +107,7 @@ void PipelineOptions::Check() const {
   front.Check();
   side.Check();
   lane.Check();
+  classes.Check();
 }
 
 namespace {
@@ -205,6 +206,7 @@ void SurroundPipeline::Collect(const FrameInput& in, bool sides, const cv::Mat g
     out->detections = MergeVehicleParts(std::move(out->detections), options_.vehicle_length_m,
                                         options_.vehicle_width_m, options_.vehicle_across_sources_only, viewpoints_);
   }
+  for (Detection& d : out->detections) SetAttributes(out->lanes.boundaries, options_.classes, &d);
 }
 
 }  // namespace dps

@@ -5,7 +5,9 @@
 // origin (x, z), the range of that point, the extent of all points and their number.
 #pragma once
 
+#include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +28,12 @@ struct Detection {
   // the object may go on beyond them unseen (the tracker then measures only across its axis).
   // Not in the CSV.
   std::vector<Eigen::Vector2d> clipped_ends;
+  // The top's height above the road as the source measured it (NaN: not measured), and the
+  // attributes the pipeline gives from it (object_attributes.h): the lane (nullopt: unknown) and
+  // the class name. detections.csv's extra columns height, lane, class.
+  double height_m = std::numeric_limits<double>::quiet_NaN();
+  std::optional<int> lane;
+  std::string object_class;
   bool has_velocity = false;            // tracks scored as detections carry their velocity
   double vx_mps = 0.0, vz_mps = 0.0;
   // Motion stereo also measures the object's ground velocity along the camera's displacement

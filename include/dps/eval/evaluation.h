@@ -20,6 +20,7 @@
 
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,6 +29,7 @@
 #include "dps/detect/detection.h"
 #include "dps/eval/visibility.h"
 #include "dps/synth/truth.h"
+#include "dps/util/lanes_csv.h"
 
 namespace dps {
 
@@ -40,10 +42,24 @@ struct EvaluationOptions {
   // every direction) - for regression tests of what a pipeline does where it looks
   // (PipelineCoverage).
   Coverage coverage;
+  // Optional: the truth's lane boundaries by frame (truth_lanes.csv), for scoring the detections'
+  // lanes (object_attributes.h's LaneOfPoint of each object's footprint centre).
+  std::map<int, std::vector<LaneBoundaryRow>> truth_lanes;
 
   // Throws dps::Error naming the field, its value and the violated constraint.
   void Check() const;
 };
+
+// How many of the matched detections' attributes were judged and right.
+struct AttributeScore {
+  int judged = 0, correct = 0;
+  double Accuracy() const;  // NaN when none judged
+};
+
+// The class a detection of an object of this truth kind should have: car -> vehicle, truck and
+// bus -> truck, pedestrian, cyclist and motorbike -> pedestrian, pole and post -> pole, anything
+// else (a wall) -> unknown.
+std::string ExpectedClass(const std::string& kind);
 
 struct BandScore {
   std::string name;            // "0-10", ...
@@ -88,6 +104,10 @@ struct EvaluationResult {
   int frames = 0;                    // frames with truth rows or detections
   int frames_with_detections = 0;    // frames with at least one detection in the zone
   std::vector<ScoringError> errors;  // by frame: missed objects, then false detections
+  // The counted objects' matches in the zone: their class (those with a class; right when it is
+  // ExpectedClass of the object's kind) and their lane (those whose object has a lane in
+  // options.truth_lanes; right when the detection's lane is the object's).
+  AttributeScore classes, lanes;
 };
 
 // Throws dps::Error when results (frame, time pairs of detections or tracks, read from `results`)

@@ -44,8 +44,12 @@ cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>&
 // range, solid or dashed as they are; the ego lane's (left, right) thicker than its neighbours'.
 void DrawLanes(cv::Mat& map, const std::vector<LaneBoundaryRow>& lanes, const MapOptions& options);
 
-// Draws the confirmed tracks onto a map picture: id, an arrow to the position predicted ahead and
-// the 1-sigma ellipse of that prediction.
+// Writes the ego's lateral position in its lane, the lane's width and the heading relative to it
+// under the map's caption.
+void DrawEgoLane(cv::Mat& map, const EgoLaneRow& ego);
+
+// Draws the confirmed tracks onto a map picture: id, class and lane (e.g. "7 vehicle L-1"), an
+// arrow to the position predicted ahead and the 1-sigma ellipse of that prediction.
 void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOptions& options);
 
 // One frame's whole map as dps-process writes it: the background, the occupancy grid under the own

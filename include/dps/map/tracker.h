@@ -25,6 +25,8 @@
 // `confirm_hits` hits and deleted after `max_misses` frames without one.
 #pragma once
 
+#include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -105,6 +107,13 @@ struct TrackState {
   // vehicle's heading) and across it, over its last 30 hits. A lower bound of the object's footprint where
   // the cameras saw only part of it. tracks.csv's extra columns length, width.
   double length_m = 0.0, width_m = 0.0;
+  // The top's height above the road: the 80th percentile of the measured heights of its last 30
+  // hits (NaN: none measured). tracks.csv's extra column height. The lane and the class are the
+  // pipeline's (object_attributes.h), from the frame's lanes and this size: extra columns lane,
+  // class.
+  double height_m = std::numeric_limits<double>::quiet_NaN();
+  std::optional<int> lane;
+  std::string object_class;
   bool confirmed = false;
   Eigen::Vector2d predicted{0, 0};   // position predict_ahead_s ahead (vehicle frame now)
   Eigen::Matrix2d predicted_cov = Eigen::Matrix2d::Identity();
@@ -139,6 +148,7 @@ class Tracker {
     // The last hits' extents (x and z sizes in their frame's vehicle axes) with that frame's
     // world_from_vehicle rotation, for the size along and across the track's current axis.
     std::vector<std::pair<Eigen::Vector2d, Eigen::Matrix2d>> extents;
+    std::vector<double> heights;  // the last hits' measured heights
   };
   // A frame's detections in the world: nearest points z, all ground points, the ends the view cut,
   // and the measurement covariances.

@@ -14,6 +14,7 @@
 #include "dps/detect/coverage.h"
 #include "dps/detect/front_detection.h"
 #include "dps/detect/lane_detection.h"
+#include "dps/detect/object_attributes.h"
 #include "dps/detect/side_detection.h"
 
 namespace dps {
@@ -30,6 +31,8 @@ struct PipelineOptions {
   double vehicle_length_m = 5.5;
   double vehicle_width_m = 2.2;
   bool vehicle_across_sources_only = false;
+  // Each detection's lane (from the frame's lanes) and class (object_attributes.h).
+  ClassOptions classes;
 
   // Throws dps::Error naming the field, its value and the violated constraint (the detectors'
   // options included).
