@@ -254,9 +254,10 @@ bool FrontDetector::Linked(const VirtualView& view, const FrontMatch& m, const c
            std::abs(TopHeight(view, m, labels, a) - TopHeight(view, m, labels, b)) > options_.link_max_top_difference_m);
 }
 
-// The component's height: per column its rows times B / d (rows ~ height x d / B), the height
-// three quarters of the columns reach.
-double FrontDetector::ComponentHeight(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const {
+// Per column of a component with a centroid, its rows times B / d: an obstacle fills rows ~ height
+// x d / B with its disparity, so this is its height there.
+std::vector<double> FrontDetector::ColumnHeights(const FrontMatch& m, const cv::Mat& labels,
+                                                 const HistogramComponent& c) const {
   std::vector<double> heights;
   for (int x = c.x_begin; x < c.x_end; ++x) {
     const float d = c.column_disparity[x - c.x_begin];
@@ -265,25 +266,24 @@ double FrontDetector::ComponentHeight(const FrontMatch& m, const cv::Mat& labels
     for (int y = 0; y < m.disparity.rows; ++y) rows += InComponent(m, labels, c.label, x, y);
     heights.push_back(rows * baseline_m_ / d);
   }
+  return heights;
+}
+
+// The component's height: the height three quarters of its columns reach (NaN: no column).
+double FrontDetector::ComponentHeight(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const {
+  std::vector<double> heights = ColumnHeights(m, labels, c);
   if (heights.empty()) return std::numeric_limits<double>::quiet_NaN();
   const size_t k = heights.size() / 4;
   std::nth_element(heights.begin(), heights.begin() + k, heights.end(), std::greater<double>());
   return heights[k];
 }
 
-// An obstacle stands up from the road: in each column it fills many rows with its disparity
-// (rows ~ height * d / B). Flat things (lane markings, road matched wrongly) and stray matches
-// fill few. Height per column = contributing rows * B / d; the component's is the median.
+// An obstacle stands up from the road: in each column it fills many rows with its disparity.
+// Flat things (lane markings, road matched wrongly) and stray matches fill few. The component's
+// height is the median of its columns'.
 bool FrontDetector::StandsUp(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels,
                              const HistogramComponent& c) const {
-  std::vector<double> heights;
-  for (int x = c.x_begin; x < c.x_end; ++x) {
-    const float d = c.column_disparity[x - c.x_begin];
-    if (!std::isfinite(d) || d <= 0) continue;
-    int rows = 0;
-    for (int y = 0; y < m.disparity.rows; ++y) rows += InComponent(m, labels, c.label, x, y);
-    heights.push_back(rows * baseline_m_ / d);
-  }
+  std::vector<double> heights = ColumnHeights(m, labels, c);
   if (heights.empty()) return false;
   std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
   return heights[heights.size() / 2] >= options_.min_obstacle_height_m ||

@@ -155,12 +155,13 @@ class FrontDetector {
   void DetectWith(Reference& ref, FrontMatch* m);
   // The steps of DetectWith: the reference's disparity (masked, temporally filtered); whether two
   // parts of the histogram are one surface; whether a component stands up from the road; and a
-  // component kept as a detection of `ref` when it lies on its side (with the top's height from the
-  // component's `labels`).
+  // component kept as a detection of `ref` when it lies on its side, with its height (per column its
+  // rows in `labels` times B / d).
   cv::Mat MatchReference(Reference& ref);
   bool Linked(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& a, int x0,
               float d0, const HistogramComponent& b, int x1, float d1) const;
   bool StandsUp(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const;
+  std::vector<double> ColumnHeights(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const;
   double ComponentHeight(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const;
   void Keep(const VirtualView& view, const HistogramComponent& c, std::pair<int, int> valid_columns, Reference& ref,
             FrontMatch* m, const cv::Mat& labels) const;
