@@ -11,6 +11,7 @@
 #include "check.h"
 #include "dps/camera/ego_motion.h"
 #include "dps/detect/lane_detection.h"
+#include "dps/detect/lane_tracking.h"
 #include "dps/eval/lane_evaluation.h"
 #include "dps/synth/scene_renderer.h"
 #include "dps/util/image.h"
@@ -166,31 +167,44 @@ void TestScores() {
   CHECK_EQ(late.events_invented, 2);
 }
 
-// The detector on a rendered drive, every frame in order, scored against the drive's lane truth.
-dps::LaneEvaluation DetectAndScore(const dps::Scene& scene, const char* label) {
+// The detector on a rendered drive, every frame in order, and the tracker after it (with the
+// scene's ego motion, as the pipeline runs them), each scored against the drive's lane truth.
+struct Scores {
+  dps::LaneEvaluation detected, tracked;
+};
+Scores DetectAndScore(const dps::Scene& scene, const char* label) {
   const dps::SceneRenderer renderer(scene);
   dps::LaneDetector detector(scene.rig);
-  std::vector<dps::LaneBoundaryRow> boundaries;
-  std::vector<dps::EgoLaneRow> ego;
+  dps::LaneTracker tracker;
+  std::vector<dps::LaneBoundaryRow> boundaries[2];
+  std::vector<dps::EgoLaneRow> ego[2];
   const size_t left = scene.rig.cameras[0].name == "left" ? 0 : 1;
   for (int f = 0; f < scene.FrameCount(); ++f) {
     const dps::FrameState st = renderer.StateAt(scene.FrameTime(f));
-    const dps::LaneFrame lanes = detector.Detect(dps::GreyImage(renderer.Render(st, left, f).image),
-                                                 dps::GreyImage(renderer.Render(st, 1 - left, f).image));
-    for (dps::LaneBoundaryRow b : lanes.boundaries) {
-      b.frame = f, b.t_s = st.t_s;
-      boundaries.push_back(b);
-    }
-    if (lanes.has_ego) {
-      dps::EgoLaneRow e = lanes.ego;
-      e.frame = f, e.t_s = st.t_s;
-      ego.push_back(e);
+    const dps::LaneFrame detected = detector.Detect(dps::GreyImage(renderer.Render(st, left, f).image),
+                                                    dps::GreyImage(renderer.Render(st, 1 - left, f).image));
+    const dps::PlanarPose motion = f > 0 ? scene.ego.Integrate({}, scene.FrameTime(f - 1), st.t_s) : dps::PlanarPose();
+    const dps::LaneFrame tracked = tracker.Update(detected, f > 0 ? &motion : nullptr, st.t_s);
+    for (int k = 0; k < 2; ++k) {
+      const dps::LaneFrame& lanes = k == 0 ? detected : tracked;
+      for (dps::LaneBoundaryRow b : lanes.boundaries) {
+        b.frame = f, b.t_s = st.t_s;
+        boundaries[k].push_back(b);
+      }
+      if (lanes.has_ego) {
+        dps::EgoLaneRow e = lanes.ego;
+        e.frame = f, e.t_s = st.t_s;
+        ego[k].push_back(e);
+      }
     }
   }
   const dps::LaneTruth truth = dps::LaneTruthOf(scene);
-  const dps::LaneEvaluation e = dps::EvaluateLanes(boundaries, truth.boundaries, ego, truth.ego);
-  std::printf("%s\n%s", label, dps::LaneEvaluationTable(e).c_str());
-  return e;
+  Scores s;
+  s.detected = dps::EvaluateLanes(boundaries[0], truth.boundaries, ego[0], truth.ego);
+  s.tracked = dps::EvaluateLanes(boundaries[1], truth.boundaries, ego[1], truth.ego);
+  std::printf("%s, detected\n%s%s, tracked\n%s", label, dps::LaneEvaluationTable(s.detected).c_str(), label,
+              dps::LaneEvaluationTable(s.tracked).c_str());
+  return s;
 }
 
 // The lane targets (the lanes issue): the ego lane's boundaries found in >= 98 % of the frames,
@@ -210,14 +224,19 @@ void CheckTargets(const dps::LaneEvaluation& e, bool p90) {
 
 void TestDetector() {
   for (const char* name : {"lead_car", "parked_cars", "overtaking"}) {
-    CheckTargets(DetectAndScore(dps_test::SmallScene(name, 320, 240), name), true);
+    const Scores s = DetectAndScore(dps_test::SmallScene(name, 320, 240), name);
+    CheckTargets(s.detected, true);
+    CheckTargets(s.tracked, true);
   }
-  CheckTargets(DetectAndScore(dps_test::SmallScene("lead_car", 640, 480), "lead_car 640x480"), true);
+  const Scores lead = DetectAndScore(dps_test::SmallScene("lead_car", 640, 480), "lead_car 640x480");
+  CheckTargets(lead.detected, true);
+  CheckTargets(lead.tracked, true);
   // The lane change: short of the 90th percentile on the right boundary while the car crosses
   // (docs/detection.md); the rest holds.
-  const dps::LaneEvaluation change = DetectAndScore(LaneChange(), "lane change");
-  CheckTargets(change, false);
-  CHECK_EQ(change.truth_events, 1);
+  const Scores change = DetectAndScore(LaneChange(), "lane change");
+  CheckTargets(change.detected, false);
+  CheckTargets(change.tracked, false);
+  CHECK_EQ(change.detected.truth_events, 1);
   // The left turn leaves the road turning 90 degrees: short of the targets (docs/detection.md).
   DetectAndScore(dps_test::SmallScene("left_turn", 320, 240), "left_turn");
   // A road without markings: nothing reported.

@@ -157,7 +157,6 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     sampled.copyTo(view, use_[i]);
   }
   const cv::Mat& valid = valid_;
-  LaneFrame out;
   const cv::Mat evidence = Evidence(StripeResponse(view, valid, o));
   // Votes per (slope, offset cell), one per row and line.
   const int slopes = static_cast<int>(slopes_.size());
@@ -217,38 +216,47 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     }
     lines.push_back(l);
   }
+  std::vector<LaneLine> found;
+  for (const Line& l : lines) {
+    found.push_back({l.offset, l.slope, l.Support() >= o.solid_support ? "solid" : "dashed",
+                     std::min(1.0, l.votes * o.cell_m / 3.0)});
+  }
+  return NameLaneLines(found, o.min_lane_width_m, &previous_lp_);
+}
+
+LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_width_m,
+                        std::optional<double>* previous_lp) {
+  LaneFrame out;
   // The ego lane's boundaries and its neighbours' outer ones.
-  const Line* left = nullptr;
-  const Line* right = nullptr;
-  for (const Line& l : lines) {
-    if (l.offset < 0 && (!left || l.offset > left->offset)) left = &l;
-    if (l.offset > 0 && (!right || l.offset < right->offset)) right = &l;
+  const LaneLine* left = nullptr;
+  const LaneLine* right = nullptr;
+  for (const LaneLine& l : lines) {
+    if (l.offset_m < 0 && (!left || l.offset_m > left->offset_m)) left = &l;
+    if (l.offset_m > 0 && (!right || l.offset_m < right->offset_m)) right = &l;
   }
-  const Line* left2 = nullptr;
-  const Line* right2 = nullptr;
-  for (const Line& l : lines) {
-    if (left && l.offset < left->offset - o.min_lane_width_m && (!left2 || l.offset > left2->offset)) left2 = &l;
-    if (right && l.offset > right->offset + o.min_lane_width_m && (!right2 || l.offset < right2->offset)) right2 = &l;
+  const LaneLine* left2 = nullptr;
+  const LaneLine* right2 = nullptr;
+  for (const LaneLine& l : lines) {
+    if (left && l.offset_m < left->offset_m - min_lane_width_m && (!left2 || l.offset_m > left2->offset_m)) left2 = &l;
+    if (right && l.offset_m > right->offset_m + min_lane_width_m && (!right2 || l.offset_m < right2->offset_m)) {
+      right2 = &l;
+    }
   }
-  const std::pair<const char*, const Line*> named[] = {{"left2", left2}, {"left", left}, {"right", right}, {"right2", right2}};
+  const std::pair<const char*, const LaneLine*> named[] = {{"left2", left2}, {"left", left}, {"right", right}, {"right2", right2}};
   for (const auto& [name, l] : named) {
-    if (!l) continue;
-    const double length_m = l->votes * o.cell_m;
-    out.boundaries.push_back({0, 0.0, name, l->offset, std::atan(l->slope) / kDeg, 0.0,
-                              l->Support() >= o.solid_support ? "solid" : "dashed", std::min(1.0, length_m / 3.0)});
+    if (l) out.boundaries.push_back({0, 0.0, name, l->offset_m, std::atan(l->slope) / kDeg, 0.0, l->type, l->confidence});
   }
   // A lane wider than two of the narrowest is two lanes with the line between them missed.
-  if (left && right && (right->offset - left->offset) <= 2 * o.min_lane_width_m) {
+  if (left && right && (right->offset_m - left->offset_m) <= 2 * min_lane_width_m) {
     const double heading = std::atan((left->slope + right->slope) / 2);
     out.has_ego = true;
-    out.ego.lp_m = -(left->offset + right->offset) / 2;
-    out.ego.lane_width_m = (right->offset - left->offset) * std::cos(heading);
+    out.ego.lp_m = -(left->offset_m + right->offset_m) / 2;
+    out.ego.lane_width_m = (right->offset_m - left->offset_m) * std::cos(heading);
     out.ego.heading_deg = -heading / kDeg;
-    if (has_previous_ && std::abs(out.ego.lp_m - previous_lp_) > out.ego.lane_width_m / 2) {
-      out.ego.event = out.ego.lp_m > previous_lp_ ? "left" : "right";
+    if (*previous_lp && std::abs(out.ego.lp_m - **previous_lp) > out.ego.lane_width_m / 2) {
+      out.ego.event = out.ego.lp_m > **previous_lp ? "left" : "right";
     }
-    has_previous_ = true;
-    previous_lp_ = out.ego.lp_m;
+    *previous_lp = out.ego.lp_m;
   }
   return out;
 }

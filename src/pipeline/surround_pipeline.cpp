@@ -107,6 +107,7 @@ void PipelineOptions::Check() const {
   front.Check();
   side.Check();
   lane.Check();
+  lane_tracking.Check();
   classes.Check();
 }
 
@@ -128,6 +129,7 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
     right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
   }
   if (options.lanes) lanes_ = std::make_unique<LaneDetector>(rig, options.lane);
+  if (options.lanes && options.track_lanes) lane_tracker_ = std::make_unique<LaneTracker>(options.lane_tracking);
 }
 
 SurroundPipeline::~SurroundPipeline() = default;
@@ -171,7 +173,12 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
     tasks.push_back([&] { out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, continuing); });
     tasks.push_back([&] { out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, continuing); });
   }
-  if (lanes_) tasks.push_back([&] { out.lanes = lanes_->Detect(grey[0], grey[1]); });
+  if (lanes_) {
+    tasks.push_back([&] {
+      out.lanes = lanes_->Detect(grey[0], grey[1]);
+      if (lane_tracker_) out.lanes = lane_tracker_->Update(out.lanes, in.motion_known ? &in.current_in_previous : nullptr, in.t_s);
+    });
+  }
   const std::vector<double> task_ms = RunTasks(tasks);
   front_->CombineReferences(&out.front);
   out.front_ms = front_views_ms + task_ms[0] + task_ms[1];

@@ -14,6 +14,8 @@
 // min_lane_width_m is two, the line between them missed: no lp then).
 #pragma once
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -47,6 +49,22 @@ struct LaneFrame {
   EgoLaneRow ego;
 };
 
+// A straight boundary near the car: x = offset + slope z in the vehicle frame, solid or dashed,
+// with a confidence 0..1.
+struct LaneLine {
+  double offset_m = 0.0, slope = 0.0;
+  std::string type = "dashed";
+  double confidence = 1.0;
+};
+
+// A frame's lanes from its lines: the nearest on each side of the car are the ego lane's (left,
+// right), the next beyond at least min_lane_width_m out its neighbours' (left2, right2); the ego's
+// lp, lane width and heading from left and right (none when they lie more than twice
+// min_lane_width_m apart: two lanes, the line between them missed); a jump of lp from
+// *previous_lp by more than half a lane is a lane change (event); *previous_lp then becomes lp.
+LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_width_m,
+                        std::optional<double>* previous_lp);
+
 class LaneDetector {
  public:
   // The rig's cameras (their masks, if any, limit the pixels); the views' tables are built here.
@@ -63,8 +81,7 @@ class LaneDetector {
   cv::Mat use_[2];              // CV_8U: the cells taken from that camera
   cv::Mat valid_;               // CV_8U: the cells either camera gives
   std::vector<double> slopes_;  // the lines' slopes sought (tan of their headings)
-  bool has_previous_ = false;
-  double previous_lp_ = 0.0;
+  std::optional<double> previous_lp_;
 };
 
 }  // namespace dps

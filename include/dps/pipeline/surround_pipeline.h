@@ -14,6 +14,7 @@
 #include "dps/detect/coverage.h"
 #include "dps/detect/front_detection.h"
 #include "dps/detect/lane_detection.h"
+#include "dps/detect/lane_tracking.h"
 #include "dps/detect/object_attributes.h"
 #include "dps/detect/side_detection.h"
 
@@ -25,6 +26,8 @@ struct PipelineOptions {
   bool sides = true;           // run motion stereo on the side views
   LaneDetectorOptions lane;
   bool lanes = true;           // find the lane markings beside the car (lane_detection.h)
+  LaneTrackerOptions lane_tracking;
+  bool track_lanes = true;     // ... and track them over time with the ego motion (lane_tracking.h)
   double merge_distance_m = 1.5;  // detections this close are one object (FuseDetections)
   // Then parts that fit into one vehicle's footprint are one object (MergeVehicleParts);
   // vehicle_length_m = 0: no such merging.
@@ -102,6 +105,7 @@ class SurroundPipeline {
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<SideDetector> left_, right_;
   std::unique_ptr<LaneDetector> lanes_;
+  std::unique_ptr<LaneTracker> lane_tracker_;
   cv::Mat previous_left_, previous_right_;  // the previous frame's omni images, grey
   double previous_t_s_ = 0.0;
   bool sides_last_ = false;  // the side detectors ran on the previous frame (Detect's `continuing`)

@@ -1,0 +1,118 @@
+#include "dps/detect/lane_tracking.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/LU>
+
+#include "dps/util/error.h"
+
+namespace dps {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// A line x = offset + slope z of the previous vehicle frame in the current one: two of its points
+// (z = 0 and 10 m) moved into the current frame, the line through them.
+Eigen::Vector2d Carried(const Eigen::Vector2d& line, const PlanarPose& current_in_previous) {
+  const Eigen::Vector2d a = WorldToBody(current_in_previous, {line.x(), 0.0});
+  const Eigen::Vector2d b = WorldToBody(current_in_previous, {line.x() + 10.0 * line.y(), 10.0});
+  const double slope = (b.x() - a.x()) / (b.y() - a.y());
+  return {a.x() - slope * a.y(), slope};
+}
+
+}  // namespace
+
+void LaneTrackerOptions::Check() const {
+  const OptionCheck Require("lane tracker");
+  Require(max_coast_s > 0, "max_coast_s", max_coast_s, "> 0 s");
+  Require(gate_m > 0, "gate_m", gate_m, "> 0 m");
+  Require(offset_sigma_m > 0, "offset_sigma_m", offset_sigma_m, "> 0 m");
+  Require(heading_sigma_deg > 0, "heading_sigma_deg", heading_sigma_deg, "> 0 deg");
+  Require(offset_drift_mps > 0, "offset_drift_mps", offset_drift_mps, "> 0 m/s");
+  Require(heading_drift_dps > 0, "heading_drift_dps", heading_drift_dps, "> 0 deg/s");
+  Require(min_measurements >= 1, "min_measurements", min_measurements, ">= 1");
+  Require(min_lane_width_m > 0, "min_lane_width_m", min_lane_width_m, "> 0 m");
+}
+
+LaneTracker::LaneTracker(const LaneTrackerOptions& options) : options_(options) { options_.Check(); }
+
+LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* current_in_previous, double t_s) {
+  const LaneTrackerOptions& o = options_;
+  const double dt = last_t_s_ ? std::max(0.0, t_s - *last_t_s_) : 0.0;
+  last_t_s_ = t_s;
+  // Predict: carried by the motion, with the drift the motion does not explain.
+  const double slope_sigma = std::tan(o.heading_sigma_deg * kDeg);
+  Eigen::Matrix2d Q = Eigen::Matrix2d::Zero();
+  Q(0, 0) = std::pow(o.offset_drift_mps * dt, 2);
+  Q(1, 1) = std::pow(std::tan(o.heading_drift_dps * kDeg) * dt, 2);
+  for (Track& t : tracks_) {
+    if (current_in_previous) {
+      const Eigen::Vector2d x = Carried(t.x, *current_in_previous);
+      Eigen::Matrix2d F;
+      for (int k = 0; k < 2; ++k) {
+        Eigen::Vector2d step = Eigen::Vector2d::Zero();
+        step(k) = 1e-4;
+        F.col(k) = (Carried(t.x + step, *current_in_previous) - Carried(t.x - step, *current_in_previous)) / 2e-4;
+      }
+      t.x = x;
+      t.P = F * t.P * F.transpose();
+    }
+    t.P += Q;
+  }
+  // Measurements, nearest pairs in offset first.
+  struct Pair {
+    double distance;
+    size_t track, measurement;
+  };
+  const std::vector<LaneBoundaryRow>& m = measured.boundaries;
+  std::vector<Pair> pairs;
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    for (size_t j = 0; j < m.size(); ++j) {
+      const double d = std::abs(tracks_[i].x.x() - m[j].offset_m);
+      if (d <= o.gate_m) pairs.push_back({d, i, j});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+  std::vector<bool> track_used(tracks_.size(), false), measurement_used(m.size(), false);
+  Eigen::Matrix2d R = Eigen::Matrix2d::Zero();
+  R(0, 0) = o.offset_sigma_m * o.offset_sigma_m;
+  R(1, 1) = slope_sigma * slope_sigma;
+  for (const Pair& p : pairs) {
+    if (track_used[p.track] || measurement_used[p.measurement]) continue;
+    track_used[p.track] = measurement_used[p.measurement] = true;
+    Track& t = tracks_[p.track];
+    const LaneBoundaryRow& b = m[p.measurement];
+    const Eigen::Vector2d z(b.offset_m, std::tan(b.heading_deg * kDeg));
+    const Eigen::Matrix2d K = t.P * (t.P + R).inverse();
+    t.x += K * (z - t.x);
+    t.P = (Eigen::Matrix2d::Identity() - K) * t.P;
+    t.last_measured_s = t_s;
+    ++t.measurements;
+    t.type = b.type;
+    t.confidence = b.confidence;
+  }
+  for (size_t j = 0; j < m.size(); ++j) {
+    if (measurement_used[j]) continue;
+    Track t;
+    t.x = Eigen::Vector2d(m[j].offset_m, std::tan(m[j].heading_deg * kDeg));
+    t.P = R;
+    t.last_measured_s = t_s;
+    t.measurements = 1;
+    t.type = m[j].type;
+    t.confidence = m[j].confidence;
+    tracks_.push_back(t);
+  }
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const Track& t) { return t_s - t.last_measured_s > o.max_coast_s; }),
+                tracks_.end());
+  std::vector<LaneLine> lines;
+  for (const Track& t : tracks_) {
+    if (t.measurements < o.min_measurements) continue;
+    const double coast = (t_s - t.last_measured_s) / o.max_coast_s;
+    lines.push_back({t.x.x(), t.x.y(), t.type, t.confidence * std::max(0.0, 1.0 - coast)});
+  }
+  return NameLaneLines(lines, o.min_lane_width_m, &previous_lp_);
+}
+
+}  // namespace dps
