@@ -177,8 +177,9 @@ void DrawLanes(cv::Mat& map, const std::vector<LaneBoundaryRow>& lanes, const Ma
 
 void DrawEgoLane(cv::Mat& map, const EgoLaneRow& ego) {
   char text[96];
-  std::snprintf(text, sizeof(text), "LP %+.2f m in a %.2f m lane, heading %+.1f deg", ego.lp_m, ego.lane_width_m,
-                ego.heading_deg);
+  // Rounded first, and + 0.0 turns -0 into 0: no "-0.0".
+  const double lp = std::round(ego.lp_m * 100) / 100 + 0.0, heading = std::round(ego.heading_deg * 10) / 10 + 0.0;
+  std::snprintf(text, sizeof(text), "LP %+.2f m in a %.2f m lane, heading %+.1f deg", lp, ego.lane_width_m, heading);
   cv::putText(map, text, cv::Point(10, 40), cv::FONT_HERSHEY_SIMPLEX, 0.45, kLaneColour, 1, cv::LINE_AA);
 }
 
