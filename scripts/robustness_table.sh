@@ -79,8 +79,10 @@ for size in $SIZES; do
     name=$(basename "$drive")
     out="$WORK/$size/out/$name"
     if [ -f "$out/detections.csv" ]; then
+      lanes=()
+      [ -f "$drive/truth_lanes.csv" ] && lanes=(--truth-lanes "$drive/truth_lanes.csv")
       "$T/dps-eval" --detections "$out/detections.csv" --tracks "$out/tracks.csv" --truth "$drive/truth.csv" \
-        --rig "$drive/rig_true.yaml" --json "$WORK/$size/$name.json" >/dev/null
+        --rig "$drive/rig_true.yaml" ${lanes[@]+"${lanes[@]}"} --json "$WORK/$size/$name.json" >/dev/null
     else
       rm -f "$WORK/$size/$name.json"
     fi
@@ -130,6 +132,9 @@ for size in sizes:
             for z in d.get("zones", []):
                 row["zone_" + z["band"]] = z["recall"] if z["objects"] else None
             row["kinds"] = {k["band"]: (k["objects"], k["matched_objects"]) for k in d.get("kinds", [])}
+            for attribute in ("classes", "lanes"):
+                a = d.get(attribute) or {}
+                row[attribute] = (a.get("correct", 0), a.get("judged", 0))
             if t:
                 row.update(track_velocity=t["overall"]["velocity_error_median_mps"],
                            track_recall=t["overall"]["recall"] if t["overall"]["objects"] else None,
@@ -209,6 +214,21 @@ for size in sizes:
             for r in g: r["kind_recall"] = r["kinds"][kind][1] / r["kinds"][kind][0]
             print(f"| {kind} | {len(g)} | {n} | {fmt(m / n)} | {stats(g, 'kind_recall')} |")
         print()
+    print("Object attributes of the matched detections (object_attributes.h; pooled over the family's")
+    print("drives): the class fitting the object's kind (car: vehicle, truck: truck, pedestrian: pedestrian,")
+    print("pole: pole, wall: unknown), the lane the object's (drives rendered with lane truth only):\n")
+    print("| family | class right | lane right |")
+    print("| --- | --- | --- |")
+    for family in families:
+        if family.startswith("empty"): continue
+        g = [r for r in group if r["family"] == family and not r["failed"]]
+        cells = []
+        for attribute in ("classes", "lanes"):
+            right = sum(r.get(attribute, (0, 0))[0] for r in g)
+            judged = sum(r.get(attribute, (0, 0))[1] for r in g)
+            cells.append(f"{fmt(right / judged)} of {judged}" if judged else "-")
+        print(f"| {family} | {cells[0]} | {cells[1]} |")
+    print()
     print("By camera family (every scene but the empty roads):\n")
     print("| camera | drives | recall | precision | range error |")
     print("| --- | --- | --- | --- | --- |")
