@@ -32,6 +32,7 @@ void LaneTrackerOptions::Check() const {
   Require(offset_drift_mps > 0, "offset_drift_mps", offset_drift_mps, "> 0 m/s");
   Require(heading_drift_dps > 0, "heading_drift_dps", heading_drift_dps, "> 0 deg/s");
   Require(min_measurements >= 1, "min_measurements", min_measurements, ">= 1");
+  Require(min_coast_share >= 0 && min_coast_share <= 1, "min_coast_share", min_coast_share, "0..1");
   Require(min_lane_width_m > 0, "min_lane_width_m", min_lane_width_m, "> 0 m");
 }
 
@@ -59,6 +60,7 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
       t.P = F * t.P * F.transpose();
     }
     t.P += Q;
+    ++t.frames;
   }
   // Measurements, nearest pairs in offset first.
   struct Pair {
@@ -67,10 +69,15 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
   };
   const std::vector<LaneBoundaryRow>& m = measured.boundaries;
   std::vector<Pair> pairs;
+  // A measurement within gate_m of a line that another measurement updates does not start a line
+  // of its own (two measurements of one boundary).
+  std::vector<bool> near_a_line(m.size(), false);
   for (size_t i = 0; i < tracks_.size(); ++i) {
     for (size_t j = 0; j < m.size(); ++j) {
       const double d = std::abs(tracks_[i].x.x() - m[j].offset_m);
-      if (d <= o.gate_m) pairs.push_back({d, i, j});
+      if (d > o.gate_m) continue;
+      near_a_line[j] = true;
+      pairs.push_back({d, i, j});
     }
   }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
@@ -89,16 +96,18 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
     t.P = (Eigen::Matrix2d::Identity() - K) * t.P;
     t.last_measured_s = t_s;
     ++t.measurements;
+    t.frames_when_measured = t.frames;
     t.type = b.type;
     t.confidence = b.confidence;
   }
   for (size_t j = 0; j < m.size(); ++j) {
-    if (measurement_used[j]) continue;
+    if (measurement_used[j] || near_a_line[j]) continue;
     Track t;
     t.x = Eigen::Vector2d(m[j].offset_m, std::tan(m[j].heading_deg * kDeg));
     t.P = R;
     t.last_measured_s = t_s;
     t.measurements = 1;
+    t.frames = t.frames_when_measured = 1;
     t.type = m[j].type;
     t.confidence = m[j].confidence;
     tracks_.push_back(t);
@@ -109,6 +118,7 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
   std::vector<LaneLine> lines;
   for (const Track& t : tracks_) {
     if (t.measurements < o.min_measurements) continue;
+    if (t.last_measured_s != t_s && t.measurements < o.min_coast_share * t.frames_when_measured) continue;
     const double coast = (t_s - t.last_measured_s) / o.max_coast_s;
     lines.push_back({t.x.x(), t.x.y(), t.type, t.confidence * std::max(0.0, 1.0 - coast)});
   }

@@ -8,8 +8,9 @@
 // vehicle, the line through them; the covariance through that map's Jacobian), plus process noise
 // for what the motion does not explain (the road's own curvature, steering between samples). The
 // frame's measured lines (LaneDetector) update the line nearest in offset within gate_m, nearest
-// pairs first; a measurement no line takes starts one; a line not measured for max_coast_s is
-// dropped, one measured in fewer than min_measurements frames not reported yet. The frame's lanes
+// pairs first; a measurement farther than gate_m from every line starts one; a line not measured for max_coast_s is
+// dropped, one measured in fewer than min_measurements frames not reported yet, one not measured
+// this frame only when measured in min_coast_share of its frames until then. The frame's lanes
 // are then named from the reported lines as the detector names its own (NameLaneLines): a
 // coasting line keeps its type and loses confidence linearly over max_coast_s.
 #pragma once
@@ -34,6 +35,10 @@ struct LaneTrackerOptions {
   double heading_drift_dps = 2.0;     // ... and turning, deg/s > 0
   int min_measurements = 2;           // a line is reported once measured in this many frames (>= 1):
                                       // one stray measurement does not stay on for max_coast_s
+  double min_coast_share = 0.5;       // ... and, in a frame that did not measure it, only when measured
+                                      // in this share of its frames up to its last measurement (0..1):
+                                      // a line seen now and then (a shadow's edge) does not stand in
+                                      // for the lane's between its sightings
   double min_lane_width_m = 2.5;      // naming, as LaneDetectorOptions' (> 0)
 
   // Throws dps::Error naming the field, its value and the violated constraint.
@@ -55,7 +60,8 @@ class LaneTracker {
     Eigen::Vector2d x{0, 0};  // offset, slope
     Eigen::Matrix2d P = Eigen::Matrix2d::Identity();
     double last_measured_s = 0.0;
-    int measurements = 0;
+    int measurements = 0, frames = 0;  // frames measured, frames lived
+    int frames_when_measured = 0;      // `frames` at the last measurement
     std::string type;
     double confidence = 1.0;
   };
