@@ -80,7 +80,12 @@ for size in $SIZES; do
     out="$WORK/$size/out/$name"
     if [ -f "$out/detections.csv" ]; then
       lanes=()
-      [ -f "$drive/truth_lanes.csv" ] && lanes=(--truth-lanes "$drive/truth_lanes.csv")
+      if [ -f "$drive/truth_lanes.csv" ]; then
+        lanes=(--truth-lanes "$drive/truth_lanes.csv")
+        [ -f "$out/lanes.csv" ] && lanes+=(--lanes "$out/lanes.csv")
+        [ -f "$out/ego_lane.csv" ] && [ -f "$drive/truth_ego_lane.csv" ] &&
+          lanes+=(--ego-lane "$out/ego_lane.csv" --truth-ego-lane "$drive/truth_ego_lane.csv")
+      fi
       "$T/dps-eval" --detections "$out/detections.csv" --tracks "$out/tracks.csv" --truth "$drive/truth.csv" \
         --rig "$drive/rig_true.yaml" ${lanes[@]+"${lanes[@]}"} --json "$WORK/$size/$name.json" >/dev/null
     else
@@ -135,6 +140,16 @@ for size in sizes:
             for attribute in ("classes", "lanes"):
                 a = d.get(attribute) or {}
                 row[attribute] = (a.get("correct", 0), a.get("judged", 0))
+            lane = e.get("lanes")
+            if lane:
+                for b in lane["boundaries"]:
+                    if b["boundary"] in ("left", "right") and b["truth_frames"]:
+                        row["lane_found_" + b["boundary"]] = b["found"] / b["truth_frames"]
+                        row["lane_median_" + b["boundary"]] = b["offset_error_median_m"]
+                        row["lane_p90_" + b["boundary"]] = b["offset_error_p90_m"]
+                row.update(lane_lp=lane["lp_error_median_m"], lane_changes=lane["lane_changes"],
+                           lane_changes_found=lane["lane_changes_found"],
+                           lane_changes_invented=lane["lane_changes_invented"])
             if t:
                 row.update(track_velocity=t["overall"]["velocity_error_median_mps"],
                            track_recall=t["overall"]["recall"] if t["overall"]["objects"] else None,
@@ -229,6 +244,26 @@ for size in sizes:
             cells.append(f"{fmt(right / judged)} of {judged}" if judged else "-")
         print(f"| {family} | {cells[0]} | {cells[1]} |")
     print()
+    laned = [r for r in group if not r["failed"] and "lane_lp" in r]
+    if laned:
+        print("Lanes (lanes.csv and ego_lane.csv against the drive's lane truth, `dps-eval --lanes`; drives")
+        print("with lane truth only): the ego lane's left and right boundaries found in the frames where the")
+        print("truth has them, their offset errors (each drive's median and 90th percentile), the lateral")
+        print("position's median error, and lane changes (found of the truth's; invented), summed:\n")
+        print("| family | drives | left / right found | offset error median (m) | offset error p90 (m) | lp error median (m) | lane changes found; invented |")
+        print("| --- | --- | --- | --- | --- | --- | --- |")
+        for family in families:
+            g = [r for r in laned if r["family"] == family]
+            if not g: continue
+            for r in g:
+                r["lane_found"] = min(r.get("lane_found_left", 0), r.get("lane_found_right", 0))
+                r["lane_median"] = max(r.get("lane_median_left") or 0, r.get("lane_median_right") or 0)
+                r["lane_p90"] = max(r.get("lane_p90_left") or 0, r.get("lane_p90_right") or 0)
+            changes = sum(r["lane_changes"] for r in g)
+            print(f"| {family} | {len(g)} | {stats(g, 'lane_found')} | {stats(g, 'lane_median', False, False)} | "
+                  f"{stats(g, 'lane_p90', False, False)} | {stats(g, 'lane_lp', False, False)} | "
+                  f"{sum(r['lane_changes_found'] for r in g)} of {changes}; {sum(r['lane_changes_invented'] for r in g)} |")
+        print("\n(found: the lower of left and right per drive; offset errors: the larger of the two.)\n")
     print("By camera family (every scene but the empty roads):\n")
     print("| camera | drives | recall | precision | range error |")
     print("| --- | --- | --- | --- | --- |")
