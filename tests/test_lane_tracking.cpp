@@ -145,7 +145,7 @@ void TestStray() {
     frames_with_ego += out.has_ego;
   }
   CHECK_EQ(stray_reported, 0);
-  CHECK_EQ(frames_with_ego, 19);  // from the second frame on (two measurements)
+  CHECK_EQ(frames_with_ego, 20);  // the first frame's lines at once
   dps::LaneTrackerOptions bad;
   bad.gate_m = 0.0;
   CHECK_THROWS_WITH(bad.Check(), dps::Error, "gate_m");

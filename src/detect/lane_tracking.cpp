@@ -40,6 +40,8 @@ LaneTracker::LaneTracker(const LaneTrackerOptions& options) : options_(options) 
 
 LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* current_in_previous, double t_s) {
   const LaneTrackerOptions& o = options_;
+  // The first frame's lines stand as the detector found them: no earlier frame to confirm them.
+  const bool first = !last_t_s_;
   const double dt = last_t_s_ ? std::max(0.0, t_s - *last_t_s_) : 0.0;
   last_t_s_ = t_s;
   // Predict: carried by the motion, with the drift the motion does not explain.
@@ -108,6 +110,7 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
     t.last_measured_s = t_s;
     t.measurements = 1;
     t.frames = t.frames_when_measured = 1;
+    t.confirmed = first;
     t.type = m[j].type;
     t.confidence = m[j].confidence;
     tracks_.push_back(t);
@@ -117,8 +120,13 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
                 tracks_.end());
   std::vector<LaneLine> lines;
   for (const Track& t : tracks_) {
-    if (t.measurements < o.min_measurements) continue;
-    if (t.last_measured_s != t_s && t.measurements < o.min_coast_share * t.frames_when_measured) continue;
+    if (!t.confirmed && t.measurements < o.min_measurements) continue;
+    // Unmeasured this frame: only a line measured min_measurements times, in min_coast_share of its
+    // frames until then.
+    if (t.last_measured_s != t_s &&
+        (t.measurements < o.min_measurements || t.measurements < o.min_coast_share * t.frames_when_measured)) {
+      continue;
+    }
     const double coast = (t_s - t.last_measured_s) / o.max_coast_s;
     lines.push_back({t.x.x(), t.x.y(), t.type, t.confidence * std::max(0.0, 1.0 - coast)});
   }

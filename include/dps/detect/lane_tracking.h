@@ -33,8 +33,10 @@ struct LaneTrackerOptions {
   double heading_sigma_deg = 1.0;     // a measured heading's noise, deg > 0
   double offset_drift_mps = 0.3;      // process noise: lateral drift the motion does not explain, m/s > 0
   double heading_drift_dps = 2.0;     // ... and turning, deg/s > 0
-  int min_measurements = 2;           // a line is reported once measured in this many frames (>= 1):
-                                      // one stray measurement does not stay on for max_coast_s
+  int min_measurements = 2;           // a line is reported once measured in this many frames (>= 1;
+                                      // the first frame's lines at once, nothing earlier to confirm
+                                      // them, but they coast only when measured this often too): one
+                                      // stray measurement does not stay on for max_coast_s
   double min_coast_share = 0.5;       // ... and, in a frame that did not measure it, only when measured
                                       // in this share of its frames up to its last measurement (0..1):
                                       // a line seen now and then (a shadow's edge) does not stand in
@@ -62,6 +64,7 @@ class LaneTracker {
     double last_measured_s = 0.0;
     int measurements = 0, frames = 0;  // frames measured, frames lived
     int frames_when_measured = 0;      // `frames` at the last measurement
+    bool confirmed = false;            // started in the tracker's first frame
     std::string type;
     double confidence = 1.0;
   };
