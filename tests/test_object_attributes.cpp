@@ -21,7 +21,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kPi = 3.14159265358979323846;
 
 std::string ClassOf(double a, double b, double height) {
-  return dps::ObjectClassName(dps::ClassifyObject(std::max(a, b), std::min(a, b), height));
+  return dps::ObjectClassName(dps::ClassifyObject(std::max(a, b), height));
 }
 
 void TestClasses() {

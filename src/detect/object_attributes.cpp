@@ -43,8 +43,7 @@ void ClassOptions::Check() const {
           ">= vehicle_max_height_m");
 }
 
-ObjectClass ClassifyObject(double length_m, double width_m, double height_m, const ClassOptions& o) {
-  (void)width_m;  // the smaller extent: a face seen edge-on, no lower bound of anything
+ObjectClass ClassifyObject(double length_m, double height_m, const ClassOptions& o) {
   const bool measured = std::isfinite(height_m);
   if (measured && (height_m < o.min_height_m || height_m > o.truck_max_height_m)) return ObjectClass::kUnknown;
   if (length_m <= o.pole_max_width_m) return ObjectClass::kPole;
@@ -86,11 +85,9 @@ std::optional<int> LaneOfPoint(const std::vector<LaneBoundaryRow>& boundaries, c
 
 void SetAttributes(const std::vector<LaneBoundaryRow>& lanes, const ClassOptions& options, Detection* d) {
   d->lane = LaneOfPoint(lanes, {(d->x_min_m + d->x_max_m) / 2, (d->z_min_m + d->z_max_m) / 2});
-  const auto [length, width] = d->points.size() >= 2
-                                   ? FootprintExtents(d->points)
-                                   : std::make_pair(std::max(d->x_max_m - d->x_min_m, d->z_max_m - d->z_min_m),
-                                                    std::min(d->x_max_m - d->x_min_m, d->z_max_m - d->z_min_m));
-  d->object_class = ObjectClassName(ClassifyObject(length, width, d->height_m, options));
+  const double length = d->points.size() >= 2 ? FootprintExtents(d->points).first
+                                              : std::max(d->x_max_m - d->x_min_m, d->z_max_m - d->z_min_m);
+  d->object_class = ObjectClassName(ClassifyObject(length, d->height_m, options));
 }
 
 std::string AttributeCells(double height_m, const std::optional<int>& lane, const std::string& object_class) {

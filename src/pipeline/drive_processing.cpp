@@ -373,7 +373,7 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   for (TrackState& t : frame_tracks) {
     t.lane = LaneOfPoint(out.lanes.boundaries, {t.x_m, t.z_m});
     t.object_class = ObjectClassName(
-        ClassifyObject(std::max(t.length_m, t.width_m), std::min(t.length_m, t.width_m), t.height_m, pipeline_options_.classes));
+        ClassifyObject(std::max(t.length_m, t.width_m), t.height_m, pipeline_options_.classes));
   }
   char caption[128];
   std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), in_.ids[f], in_.times[f],

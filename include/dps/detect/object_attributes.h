@@ -48,9 +48,10 @@ struct ClassOptions {
   void Check() const;
 };
 
-// length_m >= width_m >= 0: the footprint's larger and smaller extent on the ground; height_m: the
-// top's height above the road (NaN: not measured, the class then from the footprint alone).
-ObjectClass ClassifyObject(double length_m, double width_m, double height_m, const ClassOptions& options = {});
+// length_m: the footprint's larger extent on the ground (the smaller one bounds nothing: a face seen
+// edge-on); height_m: the object's height above the road (NaN: not measured, the class then from
+// the footprint alone).
+ObjectClass ClassifyObject(double length_m, double height_m, const ClassOptions& options = {});
 
 // The larger and smaller extent of ground points: the sides of the smallest rectangle around them
 // (any orientation); {0, 0} for fewer than two points.
@@ -61,7 +62,7 @@ std::pair<double, double> FootprintExtents(const std::vector<Eigen::Vector2d>& p
 std::optional<int> LaneOfPoint(const std::vector<LaneBoundaryRow>& boundaries, const Eigen::Vector2d& point);
 
 // Sets a detection's lane (of the centre of its points' box) among one frame's lane boundaries and
-// its class (its points' extents and its height).
+// its class (its points' larger extent and its height).
 void SetAttributes(const std::vector<LaneBoundaryRow>& lanes, const ClassOptions& options, Detection* detection);
 
 // detections.csv's and tracks.csv's extra columns height, lane, class (after DESIGN.md's): the
