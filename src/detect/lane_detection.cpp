@@ -25,24 +25,28 @@ struct Line {
 };
 
 // Each row's stripe response: a cell's core mean less the brighter of the means just beyond the
-// widest marking on either side; NaN where any of it is not seen.
+// widest marking on either side; NaN where any of it is not seen. `view` CV_8U.
 cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDetectorOptions& o) {
   const int core = std::max(0, static_cast<int>(std::lround(o.min_marking_width_m / o.cell_m / 2)));
   const int beyond = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m / 2)), band = 2;
-  cv::Mat response(view.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
-  // Prefix sums of a row and of its valid cells.
-  std::vector<double> sum(view.cols + 1, 0.0);
-  std::vector<int> seen(view.cols + 1, 0);
-  for (int r = 0; r < view.rows; ++r) {
-    const float* v = view.ptr<float>(r);
+  const float core_n = 2.0f * core + 1, band_n = band, nan = std::numeric_limits<float>::quiet_NaN();
+  cv::Mat response(view.size(), CV_32F, cv::Scalar(nan));
+  // Prefix sums of a row and of its valid cells; the cells' loop without branches, so that the
+  // compiler vectorises it.
+  const int reach = beyond + band, n = view.cols - 2 * reach;
+  std::vector<int> sum(view.cols + 1, 0), seen(view.cols + 1, 0);
+  const int whole = 2 * reach + 1;
+  for (int r = 0; r < view.rows && n > 0; ++r) {
+    const std::uint8_t* v = view.ptr<std::uint8_t>(r);
     const std::uint8_t* ok = valid.ptr<std::uint8_t>(r);
     for (int c = 0; c < view.cols; ++c) sum[c + 1] = sum[c] + v[c], seen[c + 1] = seen[c] + (ok[c] != 0);
-    const auto mean = [&](int a, int b) { return (sum[b + 1] - sum[a]) / (b - a + 1); };
-    const auto whole = [&](int a, int b) { return seen[b + 1] - seen[a] == b - a + 1; };
-    for (int c = beyond + band; c < view.cols - beyond - band; ++c) {
-      if (!whole(c - beyond - band, c + beyond + band)) continue;
-      const double left = mean(c - beyond - band, c - beyond - 1), right = mean(c + beyond + 1, c + beyond + band);
-      response.ptr<float>(r)[c] = static_cast<float>(mean(c - core, c + core) - std::max(left, right));
+    float* out = response.ptr<float>(r) + reach;
+    const int* s0 = sum.data() + reach;  // s0[i] = sum[c] for c = reach + i
+    const int* k0 = seen.data() + reach;
+    for (int i = 0; i < n; ++i) {
+      const int left = s0[i - beyond] - s0[i - reach], right = s0[i + reach + 1] - s0[i + beyond + 1];
+      const float value = (s0[i + core + 1] - s0[i - core]) / core_n - std::max(left, right) / band_n;
+      out[i] = k0[i + reach + 1] - k0[i - reach] == whole ? value : nan;
     }
   }
   return response;
@@ -52,10 +56,11 @@ cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDete
 // the statistics from every second row and column).
 cv::Mat Evidence(const cv::Mat& response) {
   std::vector<float> v;
+  v.reserve(static_cast<size_t>(response.rows / 2 + 1) * (response.cols / 2 + 1));
   for (int r = 0; r < response.rows; r += 2) {
+    const float* row = response.ptr<float>(r);
     for (int c = 0; c < response.cols; c += 2) {
-      const float x = response.at<float>(r, c);
-      if (std::isfinite(x)) v.push_back(x);
+      if (std::isfinite(row[c])) v.push_back(row[c]);
     }
   }
   cv::Mat evidence(response.size(), CV_8U, cv::Scalar(0));
@@ -65,9 +70,8 @@ cv::Mat Evidence(const cv::Mat& response) {
   for (float& x : v) x = std::abs(x - median);
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   const float threshold = median + std::max(1.0f, 4.0f * 1.4826f * v[v.size() / 2]);
-  for (int r = 0; r < response.rows; ++r) {
-    for (int c = 0; c < response.cols; ++c) evidence.at<std::uint8_t>(r, c) = response.at<float>(r, c) > threshold ? 255 : 0;
-  }
+  // NaN compares false: unseen cells are no evidence.
+  cv::compare(response, threshold, evidence, cv::CMP_GT);
   return evidence;
 }
 
@@ -142,19 +146,28 @@ LaneDetector::LaneDetector(const Rig& rig, const LaneDetectorOptions& options) :
     map_[i] = fixed;
   }
   valid_ = use_[0] | use_[1];
+  for (int i = 0; i < 2; ++i) used_[i] = cv::boundingRect(use_[i]);
   const int slopes = 2 * static_cast<int>(std::ceil(o.max_heading_deg / 2.0)) + 1;
   for (int k = 0; k < slopes; ++k) slopes_.push_back(std::tan((k - slopes / 2) * 2.0 * kDeg));
+  // x = -lateral + (c + 0.5) cell meets offset cell floor((x - slope z + lateral) / cell).
+  shift_.resize(static_cast<size_t>(height_) * slopes);
+  for (int r = 0; r < height_; ++r) {
+    const double z = o.ahead_m - (r + 0.5) * o.cell_m;
+    for (int k = 0; k < slopes; ++k) {
+      shift_[static_cast<size_t>(r) * slopes + k] = static_cast<int>(std::floor(0.5 - slopes_[k] * z / o.cell_m));
+    }
+  }
 }
 
 LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_grey) {
   const LaneDetectorOptions& o = options_;
-  cv::Mat view(height_, width_, CV_32F, cv::Scalar(0));
+  cv::Mat view(height_, width_, CV_8U, cv::Scalar(0));
   const cv::Mat* images[2] = {&left_grey, &right_grey};
   for (int i = 0; i < 2; ++i) {
+    if (used_[i].empty()) continue;
     cv::Mat sampled;
-    cv::remap(*images[i], sampled, map_[i], fraction_[i], cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    sampled.convertTo(sampled, CV_32F);
-    sampled.copyTo(view, use_[i]);
+    cv::remap(*images[i], sampled, map_[i](used_[i]), fraction_[i](used_[i]), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+    sampled.copyTo(view(used_[i]), use_[i](used_[i]));
   }
   const cv::Mat& valid = valid_;
   const cv::Mat evidence = Evidence(StripeResponse(view, valid, o));
@@ -162,13 +175,15 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
   const int slopes = static_cast<int>(slopes_.size());
   const auto slope_of = [&](int k) { return slopes_[k]; };
   const auto z_of = [&](int r) { return o.ahead_m - (r + 0.5) * o.cell_m; };
+  // Cell c of row r votes for offset cell c + shift_[r][k] at slope k (the line through its centre).
   std::vector<int> votes(static_cast<size_t>(slopes) * width_, 0);
   for (int r = 0; r < height_; ++r) {
+    const std::uint8_t* e = evidence.ptr<std::uint8_t>(r);
+    const int* shift = &shift_[static_cast<size_t>(r) * slopes];
     for (int c = 0; c < width_; ++c) {
-      if (!evidence.at<std::uint8_t>(r, c)) continue;
-      const double x = -o.lateral_m + (c + 0.5) * o.cell_m;
+      if (!e[c]) continue;
       for (int k = 0; k < slopes; ++k) {
-        const int a = static_cast<int>(std::floor((x - slope_of(k) * z_of(r) + o.lateral_m) / o.cell_m));
+        const int a = c + shift[k];
         if (a >= 0 && a < width_) ++votes[static_cast<size_t>(k) * width_ + a];
       }
     }

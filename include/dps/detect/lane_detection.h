@@ -79,8 +79,10 @@ class LaneDetector {
   int width_ = 0, height_ = 0;  // bird's-eye cells across and along
   cv::Mat map_[2], fraction_[2];  // per camera: each cell's image pixel (remap's fixed point; -1: not seen)
   cv::Mat use_[2];              // CV_8U: the cells taken from that camera
+  cv::Rect used_[2];            // ... and their bounding box (the part of the view resampled from it)
   cv::Mat valid_;               // CV_8U: the cells either camera gives
   std::vector<double> slopes_;  // the lines' slopes sought (tan of their headings)
+  std::vector<int> shift_;      // per row and slope: the offset cell a cell votes for, less its column
   std::optional<double> previous_lp_;
 };
 
