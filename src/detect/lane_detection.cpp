@@ -24,43 +24,45 @@ struct Line {
   double Support() const { return seen_rows > 0 ? static_cast<double>(votes) / seen_rows : 0.0; }
 };
 
-// Each row's stripe response: a cell's core mean less the brighter of the means just beyond the
-// widest marking on either side; NaN where any of it is not seen. `view` CV_8U.
-cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDetectorOptions& o) {
+// Each cell's stripe response: its core mean less the brighter of the means just beyond the
+// widest marking on either side (`view` CV_8U); *seen (CV_8U) is 255 where all of that is seen.
+cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDetectorOptions& o, cv::Mat* seen) {
   const int core = std::max(0, static_cast<int>(std::lround(o.min_marking_width_m / o.cell_m / 2)));
   const int beyond = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m / 2)), band = 2;
-  const float core_n = 2.0f * core + 1, band_n = band, nan = std::numeric_limits<float>::quiet_NaN();
-  cv::Mat response(view.size(), CV_32F, cv::Scalar(nan));
-  // Prefix sums of a row and of its valid cells; the cells' loop without branches, so that the
-  // compiler vectorises it.
-  const int reach = beyond + band, n = view.cols - 2 * reach;
-  std::vector<int> sum(view.cols + 1, 0), seen(view.cols + 1, 0);
-  const int whole = 2 * reach + 1;
+  const float core_n = 2.0f * core + 1, band_n = band;
+  cv::Mat response(view.size(), CV_32F, cv::Scalar(0));
+  *seen = cv::Mat(view.size(), CV_8U, cv::Scalar(0));
+  // Prefix sums of a row and of its valid cells; the cells' loops without branches, so that the
+  // compiler vectorises them.
+  const int reach = beyond + band, n = view.cols - 2 * reach, whole = 2 * reach + 1;
+  std::vector<int> sum(view.cols + 1, 0), count(view.cols + 1, 0);
   for (int r = 0; r < view.rows && n > 0; ++r) {
     const std::uint8_t* v = view.ptr<std::uint8_t>(r);
     const std::uint8_t* ok = valid.ptr<std::uint8_t>(r);
-    for (int c = 0; c < view.cols; ++c) sum[c + 1] = sum[c] + v[c], seen[c + 1] = seen[c] + (ok[c] != 0);
+    for (int c = 0; c < view.cols; ++c) sum[c + 1] = sum[c] + v[c], count[c + 1] = count[c] + (ok[c] != 0);
     float* out = response.ptr<float>(r) + reach;
+    std::uint8_t* all = seen->ptr<std::uint8_t>(r) + reach;
     const int* s0 = sum.data() + reach;  // s0[i] = sum[c] for c = reach + i
-    const int* k0 = seen.data() + reach;
+    const int* k0 = count.data() + reach;
     for (int i = 0; i < n; ++i) {
       const int left = s0[i - beyond] - s0[i - reach], right = s0[i + reach + 1] - s0[i + beyond + 1];
-      const float value = (s0[i + core + 1] - s0[i - core]) / core_n - std::max(left, right) / band_n;
-      out[i] = k0[i + reach + 1] - k0[i - reach] == whole ? value : nan;
+      out[i] = (s0[i + core + 1] - s0[i - core]) / core_n - std::max(left, right) / band_n;
     }
+    for (int i = 0; i < n; ++i) all[i] = k0[i + reach + 1] - k0[i - reach] == whole ? 255 : 0;
   }
   return response;
 }
 
-// Evidence: responses far above the view's own (median + 4 robust sigmas, at least 1 grey level;
-// the statistics from every second row and column).
-cv::Mat Evidence(const cv::Mat& response) {
+// Evidence: responses far above the view's own where seen (median + 4 robust sigmas, at least 1
+// grey level; the statistics from every second row and column).
+cv::Mat Evidence(const cv::Mat& response, const cv::Mat& seen) {
   std::vector<float> v;
   v.reserve(static_cast<size_t>(response.rows / 2 + 1) * (response.cols / 2 + 1));
   for (int r = 0; r < response.rows; r += 2) {
     const float* row = response.ptr<float>(r);
+    const std::uint8_t* ok = seen.ptr<std::uint8_t>(r);
     for (int c = 0; c < response.cols; c += 2) {
-      if (std::isfinite(row[c])) v.push_back(row[c]);
+      if (ok[c]) v.push_back(row[c]);
     }
   }
   cv::Mat evidence(response.size(), CV_8U, cv::Scalar(0));
@@ -70,9 +72,8 @@ cv::Mat Evidence(const cv::Mat& response) {
   for (float& x : v) x = std::abs(x - median);
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   const float threshold = median + std::max(1.0f, 4.0f * 1.4826f * v[v.size() / 2]);
-  // NaN compares false: unseen cells are no evidence.
   cv::compare(response, threshold, evidence, cv::CMP_GT);
-  return evidence;
+  return evidence & seen;
 }
 
 }  // namespace
@@ -170,7 +171,9 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     sampled.copyTo(view(used_[i]), use_[i](used_[i]));
   }
   const cv::Mat& valid = valid_;
-  const cv::Mat evidence = Evidence(StripeResponse(view, valid, o));
+  cv::Mat seen;
+  const cv::Mat response = StripeResponse(view, valid, o, &seen);
+  const cv::Mat evidence = Evidence(response, seen);
   // Votes per (slope, offset cell), one per row and line.
   const int slopes = static_cast<int>(slopes_.size());
   const auto slope_of = [&](int k) { return slopes_[k]; };
