@@ -264,9 +264,12 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
   for (const auto& [name, l] : named) {
     if (l) out.boundaries.push_back({0, 0.0, name, l->offset_m, std::atan(l->slope) / kDeg, 0.0, l->type, l->confidence});
   }
-  // A lane wider than two of the narrowest is two lanes with the line between them missed.
-  if (left && right && (right->offset_m - left->offset_m) <= 2 * min_lane_width_m) {
-    const double heading = std::atan((left->slope + right->slope) / 2);
+  // A lane wider than two of the narrowest is two lanes with the line between them missed; one
+  // narrower than the narrowest is no lane (a line that is not a boundary, e.g. an edge on the
+  // road the car is turning onto).
+  const double heading = left && right ? std::atan((left->slope + right->slope) / 2) : 0.0;
+  if (left && right && (right->offset_m - left->offset_m) <= 2 * min_lane_width_m &&
+      (right->offset_m - left->offset_m) * std::cos(heading) >= min_lane_width_m) {
     out.has_ego = true;
     out.ego.lp_m = -(left->offset_m + right->offset_m) / 2;
     out.ego.lane_width_m = (right->offset_m - left->offset_m) * std::cos(heading);

@@ -11,7 +11,8 @@
 // Each is refined by least squares on its evidence; solid when its evidence covers solid_support
 // of its rows. From left and right: the lateral position (lp), the lane's width and the heading;
 // a jump of lp by more than half a lane is a lane change (a "lane" wider than twice
-// min_lane_width_m is two, the line between them missed: no lp then).
+// min_lane_width_m is two, the line between them missed, and one narrower than min_lane_width_m
+// across is none, one of its lines no boundary: no lp then).
 #pragma once
 
 #include <optional>
@@ -60,7 +61,8 @@ struct LaneLine {
 // A frame's lanes from its lines: the nearest on each side of the car are the ego lane's (left,
 // right), the next beyond at least min_lane_width_m out its neighbours' (left2, right2); the ego's
 // lp, lane width and heading from left and right (none when they lie more than twice
-// min_lane_width_m apart: two lanes, the line between them missed); a jump of lp from
+// min_lane_width_m apart: two lanes, the line between them missed; nor when the lane is narrower
+// than min_lane_width_m across: one of them is no boundary); a jump of lp from
 // *previous_lp by more than half a lane is a lane change (event); *previous_lp then becomes lp.
 LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_width_m,
                         std::optional<double>* previous_lp);
