@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <string>
 
 #include "check.h"
 #include "dps/camera/ego_motion.h"
@@ -255,12 +257,52 @@ void TestDetector() {
   CHECK(reported <= 0.01 * plain.FrameCount());
 }
 
+// Naming lines: the ego lane from the nearest line on either side, its lp and width; none when the
+// two lie closer than the narrowest lane across (a line of the road turned onto, 1.25 m from the
+// left boundary: the frame in between would make two lane changes out of nothing) or further
+// than two lanes apart; a real crossing of the line is a lane change.
+void TestNaming() {
+  const double narrowest = 2.5;
+  std::optional<double> lp;
+  dps::LaneFrame f = dps::NameLaneLines({{-1.75, 0.0}, {1.75, 0.0}, {5.25, 0.0}}, narrowest, &lp);
+  CHECK(f.has_ego);
+  CHECK_NEAR(f.ego.lp_m, 0.0, 1e-9);
+  CHECK_NEAR(f.ego.lane_width_m, 3.5, 1e-9);
+  CHECK_EQ(f.boundaries.size(), size_t{3});
+  // A stray line 1.25 m right of the left boundary: no lane, no lp, no event, lp kept.
+  f = dps::NameLaneLines({{-1.75, 0.0}, {-0.5, 0.0}, {1.75, 0.0}}, narrowest, &lp);
+  CHECK(!f.has_ego);
+  CHECK(f.ego.event.empty());
+  f = dps::NameLaneLines({{-1.75, 0.0}, {1.75, 0.0}}, narrowest, &lp);
+  CHECK(f.has_ego);
+  CHECK(f.ego.event.empty());
+  // Turned 40 degrees: 3.3 m apart along the car's axis are 2.5 m across: still a lane; 3.0 m apart
+  // (2.3 m across) is none.
+  const double slope = std::tan(40.0 * kPi / 180.0);
+  f = dps::NameLaneLines({{-1.6, slope}, {1.7, slope}}, narrowest, &lp);
+  CHECK(f.has_ego);
+  f = dps::NameLaneLines({{-1.5, slope}, {1.5, slope}}, narrowest, &lp);
+  CHECK(!f.has_ego);
+  // Two lanes (the line between missed): none.
+  f = dps::NameLaneLines({{-1.75, 0.0}, {5.25, 0.0}}, narrowest, &lp);
+  CHECK(!f.has_ego);
+  // The car crosses its right boundary: just before, it is 1.7 m right of its lane's centre; just
+  // after, 1.7 m left of the next lane's: a lane change to the right.
+  f = dps::NameLaneLines({{-3.45, 0.0}, {0.05, 0.0}}, narrowest, &lp);
+  CHECK_NEAR(f.ego.lp_m, 1.7, 1e-9);
+  CHECK(f.ego.event.empty());
+  f = dps::NameLaneLines({{-0.05, 0.0}, {3.45, 0.0}}, narrowest, &lp);
+  CHECK_NEAR(f.ego.lp_m, -1.7, 1e-9);
+  CHECK_EQ(f.ego.event, std::string("right"));
+}
+
 }  // namespace
 
 int main() {
   TestTruth();
   TestFiles();
   TestScores();
+  TestNaming();
   TestDetector();
   return dps_test::Report();
 }
