@@ -25,12 +25,16 @@ struct Line {
 };
 
 // Each cell's stripe response: its core mean less the brighter of the means just beyond the
-// widest marking on either side (`view` CV_8U); *seen (CV_8U) is 255 where all of that is seen.
-cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDetectorOptions& o, cv::Mat* seen) {
+// widest marking on either side, in grey levels times `scale` (an integer: the core's and the
+// band's sums over the least common multiple of their widths; `view` CV_8U); *seen (CV_8U) is 255
+// where all of that is seen.
+cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDetectorOptions& o, cv::Mat* seen,
+                       int* scale) {
   const int core = std::max(0, static_cast<int>(std::lround(o.min_marking_width_m / o.cell_m / 2)));
   const int beyond = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m / 2)), band = 2;
-  const float core_n = 2.0f * core + 1, band_n = band;
-  cv::Mat response(view.size(), CV_32F, cv::Scalar(0));
+  const int core_n = 2 * core + 1;
+  *scale = core_n * band;  // core mean - band mean = (band core_sum - core_n band_sum) / scale
+  cv::Mat response(view.size(), CV_32S, cv::Scalar(0));
   *seen = cv::Mat(view.size(), CV_8U, cv::Scalar(0));
   // Prefix sums of a row and of its valid cells; the cells' loops without branches, so that the
   // compiler vectorises them.
@@ -40,26 +44,39 @@ cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDete
     const std::uint8_t* v = view.ptr<std::uint8_t>(r);
     const std::uint8_t* ok = valid.ptr<std::uint8_t>(r);
     for (int c = 0; c < view.cols; ++c) sum[c + 1] = sum[c] + v[c], count[c + 1] = count[c] + (ok[c] != 0);
-    float* out = response.ptr<float>(r) + reach;
+    int* out = response.ptr<int>(r) + reach;
     std::uint8_t* all = seen->ptr<std::uint8_t>(r) + reach;
     const int* s0 = sum.data() + reach;  // s0[i] = sum[c] for c = reach + i
     const int* k0 = count.data() + reach;
     for (int i = 0; i < n; ++i) {
       const int left = s0[i - beyond] - s0[i - reach], right = s0[i + reach + 1] - s0[i + beyond + 1];
-      out[i] = (s0[i + core + 1] - s0[i - core]) / core_n - std::max(left, right) / band_n;
+      out[i] = band * (s0[i + core + 1] - s0[i - core]) - core_n * std::max(left, right);
     }
     for (int i = 0; i < n; ++i) all[i] = k0[i + reach + 1] - k0[i - reach] == whole ? 255 : 0;
   }
   return response;
 }
 
+// The value at sorted position values.size() / 2 of integers within +-bound, by counting.
+int MedianByCount(const std::vector<int>& values, int bound, std::vector<int>* counts) {
+  counts->assign(2 * static_cast<size_t>(bound) + 1, 0);
+  for (const int x : values) ++(*counts)[x + bound];
+  size_t seen = 0;
+  for (int k = 0; k <= 2 * bound; ++k) {
+    seen += (*counts)[k];
+    if (seen > values.size() / 2) return k - bound;
+  }
+  return bound;
+}
+
 // Evidence: responses far above the view's own where seen (median + 4 robust sigmas, at least 1
-// grey level; the statistics from every second row and column).
-cv::Mat Evidence(const cv::Mat& response, const cv::Mat& seen) {
-  std::vector<float> v;
+// grey level; the statistics from every second row and column). `scale`: the response's units
+// per grey level.
+cv::Mat Evidence(const cv::Mat& response, const cv::Mat& seen, int scale) {
+  std::vector<int> v;
   v.reserve(static_cast<size_t>(response.rows / 2 + 1) * (response.cols / 2 + 1));
   for (int r = 0; r < response.rows; r += 2) {
-    const float* row = response.ptr<float>(r);
+    const int* row = response.ptr<int>(r);
     const std::uint8_t* ok = seen.ptr<std::uint8_t>(r);
     for (int c = 0; c < response.cols; c += 2) {
       if (ok[c]) v.push_back(row[c]);
@@ -67,11 +84,13 @@ cv::Mat Evidence(const cv::Mat& response, const cv::Mat& seen) {
   }
   cv::Mat evidence(response.size(), CV_8U, cv::Scalar(0));
   if (v.size() < 100) return evidence;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  const float median = v[v.size() / 2];
-  for (float& x : v) x = std::abs(x - median);
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  const float threshold = median + std::max(1.0f, 4.0f * 1.4826f * v[v.size() / 2]);
+  // |response| <= 255 scale: the median and the median deviation by counting.
+  const int bound = 255 * scale;
+  std::vector<int> counts;
+  const int median = MedianByCount(v, bound, &counts);
+  for (int& x : v) x = std::abs(x - median);
+  const int deviation = MedianByCount(v, 2 * bound, &counts);
+  const double threshold = median + std::max(1.0 * scale, 4.0 * 1.4826 * deviation);
   cv::compare(response, threshold, evidence, cv::CMP_GT);
   return evidence & seen;
 }
@@ -172,8 +191,9 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
   }
   const cv::Mat& valid = valid_;
   cv::Mat seen;
-  const cv::Mat response = StripeResponse(view, valid, o, &seen);
-  const cv::Mat evidence = Evidence(response, seen);
+  int scale = 1;
+  const cv::Mat response = StripeResponse(view, valid, o, &seen, &scale);
+  const cv::Mat evidence = Evidence(response, seen, scale);
   // Votes per (slope, offset cell), one per row and line.
   const int slopes = static_cast<int>(slopes_.size());
   const auto slope_of = [&](int k) { return slopes_[k]; };
