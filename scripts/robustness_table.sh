@@ -150,6 +150,10 @@ for size in sizes:
                 row.update(lane_lp=lane["lp_error_median_m"], lane_changes=lane["lane_changes"],
                            lane_changes_found=lane["lane_changes_found"],
                            lane_changes_invented=lane["lane_changes_invented"])
+                # The drive's ego lane: the lower found rate and the larger errors of left and right.
+                row["lane_found"] = min(row.get("lane_found_left", 0), row.get("lane_found_right", 0))
+                row["lane_median"] = max(row.get("lane_median_left") or 0, row.get("lane_median_right") or 0)
+                row["lane_p90"] = max(row.get("lane_p90_left") or 0, row.get("lane_p90_right") or 0)
             if t:
                 row.update(track_velocity=t["overall"]["velocity_error_median_mps"],
                            track_recall=t["overall"]["recall"] if t["overall"]["objects"] else None,
@@ -255,10 +259,6 @@ for size in sizes:
         for family in families:
             g = [r for r in laned if r["family"] == family]
             if not g: continue
-            for r in g:
-                r["lane_found"] = min(r.get("lane_found_left", 0), r.get("lane_found_right", 0))
-                r["lane_median"] = max(r.get("lane_median_left") or 0, r.get("lane_median_right") or 0)
-                r["lane_p90"] = max(r.get("lane_p90_left") or 0, r.get("lane_p90_right") or 0)
             changes = sum(r["lane_changes"] for r in g)
             print(f"| {family} | {len(g)} | {stats(g, 'lane_found')} | {stats(g, 'lane_median', False, False)} | "
                   f"{stats(g, 'lane_p90', False, False)} | {stats(g, 'lane_lp', False, False)} | "

@@ -36,11 +36,12 @@ cv::Mat StripeResponse(const cv::Mat& view, const cv::Mat& valid, const LaneDete
   *scale = core_n * band;  // core mean - band mean = (band core_sum - core_n band_sum) / scale
   cv::Mat response(view.size(), CV_32S, cv::Scalar(0));
   *seen = cv::Mat(view.size(), CV_8U, cv::Scalar(0));
+  const int reach = beyond + band, n = view.cols - 2 * reach, whole = 2 * reach + 1;
+  if (n <= 0) return response;
   // Prefix sums of a row and of its valid cells; the cells' loops without branches, so that the
   // compiler vectorises them.
-  const int reach = beyond + band, n = view.cols - 2 * reach, whole = 2 * reach + 1;
   std::vector<int> sum(view.cols + 1, 0), count(view.cols + 1, 0);
-  for (int r = 0; r < view.rows && n > 0; ++r) {
+  for (int r = 0; r < view.rows; ++r) {
     const std::uint8_t* v = view.ptr<std::uint8_t>(r);
     const std::uint8_t* ok = valid.ptr<std::uint8_t>(r);
     for (int c = 0; c < view.cols; ++c) sum[c + 1] = sum[c] + v[c], count[c + 1] = count[c] + (ok[c] != 0);
@@ -82,8 +83,7 @@ cv::Mat Evidence(const cv::Mat& response, const cv::Mat& seen, int scale) {
       if (ok[c]) v.push_back(row[c]);
     }
   }
-  cv::Mat evidence(response.size(), CV_8U, cv::Scalar(0));
-  if (v.size() < 100) return evidence;
+  if (v.size() < 100) return cv::Mat(response.size(), CV_8U, cv::Scalar(0));
   // |response| <= 255 scale: the median and the median deviation by counting.
   const int bound = 255 * scale;
   std::vector<int> counts;
@@ -91,6 +91,7 @@ cv::Mat Evidence(const cv::Mat& response, const cv::Mat& seen, int scale) {
   for (int& x : v) x = std::abs(x - median);
   const int deviation = MedianByCount(v, 2 * bound, &counts);
   const double threshold = median + std::max(1.0 * scale, 4.0 * 1.4826 * deviation);
+  cv::Mat evidence;
   cv::compare(response, threshold, evidence, cv::CMP_GT);
   return evidence & seen;
 }

@@ -8,11 +8,11 @@
 // vehicle, the line through them; the covariance through that map's Jacobian), plus process noise
 // for what the motion does not explain (the road's own curvature, steering between samples). The
 // frame's measured lines (LaneDetector) update the line nearest in offset within gate_m, nearest
-// pairs first; a measurement farther than gate_m from every line starts one; a line not measured for max_coast_s is
-// dropped, one measured in fewer than min_measurements frames not reported yet, one not measured
-// this frame only when measured in min_coast_share of its frames until then. The frame's lanes
-// are then named from the reported lines as the detector names its own (NameLaneLines): a
-// coasting line keeps its type and loses confidence linearly over max_coast_s.
+// pairs first; a measurement farther than gate_m from every line starts one; a line not measured
+// for max_coast_s is dropped, one measured in fewer than min_measurements frames not reported yet,
+// one not measured this frame only when measured in min_coast_share of its frames until then. The
+// frame's lanes are then named from the reported lines as the detector names its own
+// (NameLaneLines): a coasting line keeps its type and loses confidence linearly over max_coast_s.
 #pragma once
 
 #include <optional>
