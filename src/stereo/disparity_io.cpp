@@ -84,6 +84,14 @@ cv::Mat ReadDisparity(const std::string& path) {
     if (!in || magic != "Pf" || w <= 0 || h <= 0 || scale >= 0) {
       throw Error(Str(path, ": not a little-endian grey PFM"));
     }
+    // The header's size is checked against the file before anything is allocated for it.
+    const auto data_start = static_cast<std::uintmax_t>(in.tellg());
+    const std::uintmax_t file_size = std::filesystem::file_size(path);
+    const std::uintmax_t pixels = static_cast<std::uintmax_t>(w) * static_cast<std::uintmax_t>(h);
+    if (data_start > file_size || pixels > (file_size - data_start) / sizeof(float)) {
+      throw Error(Str(path, ": truncated PFM (header says ", w, " x ", h, ", the file holds ",
+                      file_size > data_start ? (file_size - data_start) / sizeof(float) : 0, " values)"));
+    }
     cv::Mat d(h, w, CV_32F);
     for (int y = h - 1; y >= 0; --y) {
       in.read(reinterpret_cast<char*>(d.ptr<float>(y)), static_cast<std::streamsize>(w * sizeof(float)));
