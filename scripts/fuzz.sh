@@ -41,7 +41,11 @@ for r in "${READERS[@]}"; do
   corpus="$FUZZ_DIR/corpus/$r"
   mkdir -p "$corpus"
   echo "fuzz_$r: ${SECONDS_EACH} s" >&2
+  # The YAML readers give OpenCV's parser 10 s (util/yaml_guard.cpp); a file it loops on is
+  # refused and the parser's thread left running, its memory in use: no leak check for them.
+  case $r in rig|scene) leaks=0 ;; *) leaks=1 ;; esac
   if ! "$FUZZ_DIR/fuzz_$r" -max_total_time="$SECONDS_EACH" -timeout=20 -rss_limit_mb=4096 -print_final_stats=1 \
+       -detect_leaks=$leaks \
        -artifact_prefix="$FUZZ_DIR/findings/$r-" "$corpus" "$seeds/$r" 2> "$FUZZ_DIR/fuzz_$r.log"; then
     echo "fuzz_$r: FINDING (see $FUZZ_DIR/fuzz_$r.log and $FUZZ_DIR/findings/)" >&2
     status=1

@@ -33,7 +33,8 @@ cv::Mat CameraValidMask(const RigCamera& camera) {
 }
 
 cv::Mat ReadCameraMask(const std::string& path, const CameraModel& model) {
-  if (!std::filesystem::is_regular_file(path)) throw Error(Str(path, ": cannot read the mask image (no such file)"));
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) throw Error(Str(path, ": cannot read the mask image (no such file)"));
   const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
   if (image.empty()) throw Error(Str(path, ": cannot read the mask image"));
   if (image.cols != model.width() || image.rows != model.height()) {

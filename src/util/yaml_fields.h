@@ -29,7 +29,8 @@ inline std::string OneLine(const cv::Exception& e) {
 cv::FileStorage OpenWithin(const std::string& path, double seconds);
 
 inline cv::FileStorage OpenForReading(const std::string& path) {
-  if (!std::filesystem::exists(path)) throw Error(Str(path, ": file not found"));
+  std::error_code error;  // e.g. a name too long for the file system: not found either
+  if (!std::filesystem::exists(path, error)) throw Error(Str(path, ": file not found"));
   cv::FileStorage fs;
   try {
     fs = OpenWithin(path, 10.0);
