@@ -13,7 +13,7 @@ mkdir -p "$OUT"
 "$T/dps-synth" "$ROOT/data/scenes/$SCENE.yaml" --out "$OUT/drives/$SCENE" --force
 "$T/dps-process" "$OUT/drives/$SCENE" --out "$OUT/results" --force --map-png
 "$T/dps-eval" --detections "$OUT/results/$SCENE/detections.csv" --tracks "$OUT/results/$SCENE/tracks.csv" \
-  --truth "$OUT/drives/$SCENE/truth.csv" \
+  --truth "$OUT/drives/$SCENE/truth.csv" --frames "$OUT/drives/$SCENE/frames.csv" \
   --lanes "$OUT/results/$SCENE/lanes.csv" --truth-lanes "$OUT/drives/$SCENE/truth_lanes.csv" \
   --ego-lane "$OUT/results/$SCENE/ego_lane.csv" --truth-ego-lane "$OUT/drives/$SCENE/truth_ego_lane.csv" \
   --rig "$OUT/drives/$SCENE/rig.yaml" --json "$OUT/results/$SCENE/scores.json" | tee "$OUT/results/$SCENE/scores.txt"

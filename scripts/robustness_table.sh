@@ -87,7 +87,7 @@ for size in $SIZES; do
           lanes+=(--ego-lane "$out/ego_lane.csv" --truth-ego-lane "$drive/truth_ego_lane.csv")
       fi
       "$T/dps-eval" --detections "$out/detections.csv" --tracks "$out/tracks.csv" --truth "$drive/truth.csv" \
-        --rig "$drive/rig_true.yaml" ${lanes[@]+"${lanes[@]}"} --json "$WORK/$size/$name.json" >/dev/null
+        --frames "$drive/frames.csv" --rig "$drive/rig_true.yaml" ${lanes[@]+"${lanes[@]}"} --json "$WORK/$size/$name.json" >/dev/null
     else
       rm -f "$WORK/$size/$name.json"
     fi

@@ -419,6 +419,22 @@ void TestEvaluation() {
   CHECK_EQ(dps::ScoringErrorsCsv(r), std::string("frame,error,id,kind,x,z,range\n"
                                                  "0,missed,1,car,0.000,7.750,7.750\n"
                                                  "0,false,-1,front,2.000,7.000,7.280\n"));
+  // An empty road of 10 frames with a false detection in frame 3 (and one 30 m out in frame 5):
+  // without the drive's frame count only the frames with detections are known; with it, 1 of 10
+  // frames has a detection in the zone.
+  dps::Detection late = det(0.0, 3.0, "front"), far_out = det(0.0, 30.0, "front");
+  late.frame = 3;
+  far_out.frame = 5;
+  r = dps::Evaluate({late, far_out}, {}, dps::EvaluationOptions{});
+  CHECK_EQ(r.frames, 2);
+  dps::EvaluationOptions drive;
+  drive.frame_count = 10;
+  r = dps::Evaluate({late, far_out}, {}, drive);
+  CHECK_EQ(r.frames, 10);
+  CHECK_EQ(r.frames_with_detections, 1);
+  CHECK_EQ(r.overall.detections, 1);
+  drive.frame_count = -1;
+  CHECK_THROWS_WITH(dps::Evaluate({}, {}, drive), dps::Error, "evaluation option frame_count = -1");
 }
 
 // Front detection on rendered drives: the lead car found at its true range in every frame where

@@ -10,6 +10,7 @@
 #include "dps/eval/lane_evaluation.h"
 #include "dps/map/tracker.h"
 #include "dps/map/tracks_io.h"
+#include "dps/pipeline/drive_io.h"
 #include "dps/synth/truth_io.h"
 #include "dps/util/atomic_file.h"
 
@@ -39,6 +40,9 @@ pedestrian, cyclist, motorbike: pedestrian; pole, post: pole; others: unknown).
                       |v_track - v_truth| and the identity switches (a truth object matched by a
                       different track than before)
   --truth FILE        truth.csv
+  --frames FILE       the drive's frames.csv: every frame it lists counts for the frames with and
+                      without a detection, also one without objects or detections (without it, the
+                      frames with truth rows or detections: on an empty road, only those with one)
   --max-range M       evaluated zone, metres (default 20)
   --rig FILE          the rig whose cameras see the objects (for a synthetic drive its
                       rig_true.yaml, the rig it was rendered with; else rig.yaml); masks named in
@@ -67,7 +71,7 @@ pedestrian, cyclist, motorbike: pedestrian; pole, post: pole; others: unknown).
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-eval", [&] {
     const dps_cli::Args args(argc, argv,
-                             {"detections", "tracks", "truth", "max-range", "rig", "masks", "json", "errors", "lanes",
+                             {"detections", "tracks", "truth", "frames", "max-range", "rig", "masks", "json", "errors", "lanes",
                               "truth-lanes", "ego-lane", "truth-ego-lane"},
                              {});
     if (args.help()) {
@@ -88,6 +92,7 @@ int main(int argc, char** argv) {
     dps::EvaluationOptions options;
     options.max_range_m = args.Number("max-range", 20.0);
     if (!(options.max_range_m > 0)) throw dps::Error("option --max-range: expected > 0");
+    if (args.Has("frames")) options.frame_count = static_cast<int>(dps::ReadFrameTimes(args.Get("frames")).size());
     if (args.Has("masks") && !args.Has("rig")) throw dps::Error("option --masks needs --rig");
     if (args.Has("rig")) {
       dps::Rig rig = dps::ReadRig(args.Get("rig"));

@@ -238,6 +238,7 @@ EvaluationResult EvaluateCounted(const std::vector<Detection>& detections, const
   std::vector<int> frames;
   for (const auto& [f, v] : truth_by_frame) frames.push_back(f);
   for (const auto& [f, v] : det_by_frame) frames.push_back(f);
+  for (int f = 0; f < options.frame_count; ++f) frames.push_back(f);
   std::sort(frames.begin(), frames.end());
   frames.erase(std::unique(frames.begin(), frames.end()), frames.end());
   result.frames = static_cast<int>(frames.size());
@@ -462,6 +463,7 @@ void EvaluationOptions::Check() const {
   const OptionCheck Require("evaluation");
   Require(max_range_m > 0 && max_range_m <= 1000, "max_range_m", max_range_m, "0 < range <= 1000 m");
   Require(vehicle_length_m > 0 && vehicle_length_m <= 100, "vehicle_length_m", vehicle_length_m, "0 < length <= 100 m");
+  Require(frame_count >= 0, "frame_count", frame_count, ">= 0");
 }
 
 }  // namespace dps

@@ -38,6 +38,10 @@ struct EvaluationOptions {
   // Which objects the cameras see; null: every object within range counts.
   std::shared_ptr<const Visibility> visibility;
   double vehicle_length_m = 4.8;  // for the zones (> 0); the visibility's rig's when it is set
+  // > 0: the drive has frames 0 .. frame_count - 1 (its frames.csv), and each counts in
+  // EvaluationResult::frames, also one without truth rows or detections (on an empty road, a frame
+  // without a false detection); 0: the frames with truth rows or detections. >= 0.
+  int frame_count = 0;
   // Optional, not DESIGN.md §5: objects and detections count only inside these sectors too (empty:
   // every direction) - for regression tests of what a pipeline does where it looks
   // (PipelineCoverage).
@@ -101,7 +105,7 @@ struct EvaluationResult {
   std::vector<SourceScore> sources;  // front, left, right
   std::vector<BandScore> kinds;      // recall and range errors by the objects' truth kind (car, pole, ...),
                                      // in order of first appearance; detections are not split by kind
-  int frames = 0;                    // frames with truth rows or detections
+  int frames = 0;                    // frames with truth rows or detections (and the options' frame_count)
   int frames_with_detections = 0;    // frames with at least one detection in the zone
   std::vector<ScoringError> errors;  // by frame: missed objects, then false detections
   // The counted objects' matches in the zone: their class (those with a class; right when it is
