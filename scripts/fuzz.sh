@@ -44,7 +44,8 @@ for r in "${READERS[@]}"; do
   # The YAML readers give OpenCV's parser 10 s (util/yaml_guard.cpp); a file it loops on is
   # refused and the parser's thread left running, its memory in use: no leak check for them.
   case $r in rig|scene) leaks=0 ;; *) leaks=1 ;; esac
-  if ! "$FUZZ_DIR/fuzz_$r" -max_total_time="$SECONDS_EACH" -timeout=20 -rss_limit_mb=4096 -print_final_stats=1 \
+  if ! ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=$leaks" \
+       "$FUZZ_DIR/fuzz_$r" -max_total_time="$SECONDS_EACH" -timeout=20 -rss_limit_mb=4096 -print_final_stats=1 \
        -detect_leaks=$leaks \
        -artifact_prefix="$FUZZ_DIR/findings/$r-" "$corpus" "$seeds/$r" 2> "$FUZZ_DIR/fuzz_$r.log"; then
     echo "fuzz_$r: FINDING (see $FUZZ_DIR/fuzz_$r.log and $FUZZ_DIR/findings/)" >&2
