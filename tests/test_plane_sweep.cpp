@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 #include "check.h"
 #include "dps/stereo/plane_sweep.h"
@@ -170,7 +173,43 @@ void TestBadInputs() {
 
 }  // namespace
 
+// The picture of a sweep: each label's colour where the label says, an obstacle's colour by its
+// distance (turbo: red near, blue far, even in inverse distance), the legend in the corner.
+void TestPicture() {
+  const cv::Mat image(120, 400, CV_8U, cv::Scalar(100));
+  dps::SweepResult sweep;
+  sweep.label = cv::Mat(image.size(), CV_8U, cv::Scalar(dps::kSweepNoRay));
+  sweep.distance_m = cv::Mat(image.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+  sweep.score = sweep.distance_m.clone();
+  const cv::Point near(300, 100), far(310, 100), middle(320, 100), road(330, 100), epipole(340, 100), none(350, 100);
+  for (const cv::Point& p : {near, far, middle}) sweep.label.at<std::uint8_t>(p) = dps::kSweepObstacle;
+  sweep.distance_m.at<float>(near) = 1.0f;
+  sweep.distance_m.at<float>(far) = 40.0f;
+  sweep.distance_m.at<float>(middle) = 2.0f;  // inverse distance halfway between 1 m and infinity
+  sweep.label.at<std::uint8_t>(road) = dps::kSweepRoad;
+  sweep.label.at<std::uint8_t>(epipole) = dps::kSweepUnobservable;
+  sweep.label.at<std::uint8_t>(none) = dps::kSweepAmbiguous;
+  const cv::Mat picture = dps::SweepPicture(image, sweep, 1.0, 40.0);
+  CHECK_EQ(picture.type(), CV_8UC3);
+  CHECK(picture.size() == image.size());
+  cv::Mat ramp(1, 256, CV_8U), turbo;
+  for (int i = 0; i < 256; ++i) ramp.at<std::uint8_t>(0, i) = static_cast<std::uint8_t>(i);
+  cv::applyColorMap(ramp, turbo, cv::COLORMAP_TURBO);
+  CHECK(picture.at<cv::Vec3b>(near) == turbo.at<cv::Vec3b>(0, 255));
+  CHECK(picture.at<cv::Vec3b>(far) == turbo.at<cv::Vec3b>(0, 0));
+  // 1/2 m between 1/1 and 1/40: (0.5 - 0.025) / (1 - 0.025) of the ramp.
+  CHECK(picture.at<cv::Vec3b>(middle) == turbo.at<cv::Vec3b>(0, static_cast<int>(std::lround(255 * 0.475 / 0.975))));
+  const cv::Vec3b r = picture.at<cv::Vec3b>(road), e = picture.at<cv::Vec3b>(epipole);
+  CHECK(r[1] > r[0] + 50 && r[1] > r[2] + 50);                      // green
+  CHECK(e[0] > e[1] + 50 && e[2] > e[1] + 50);                      // magenta
+  CHECK(picture.at<cv::Vec3b>(none) == cv::Vec3b(100, 100, 100));  // the image
+  CHECK(picture.at<cv::Vec3b>(119, 399) == cv::Vec3b(0, 0, 0));    // no ray
+  CHECK(picture.at<cv::Vec3b>(2, 2) != cv::Vec3b(0, 0, 0));        // the legend
+  CHECK_THROWS_WITH(dps::SweepPicture(image, sweep, 40.0, 1.0), dps::Error, "expected 0 < min < max");
+}
+
 int main() {
+  TestPicture();
   TestParkedCars();
   TestSeveralFramesAndRegion();
   TestBadInputs();

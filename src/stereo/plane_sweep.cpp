@@ -315,4 +315,57 @@ SweepResult PlaneSweep(const CameraModel& model, const Pose& vehicle_from_camera
   return PlaneSweeper(model, vehicle_from_camera, valid, cv::Mat(), options).Sweep(previous, current, previous_from_current);
 }
 
+cv::Mat SweepPicture(const cv::Mat& image, const SweepResult& sweep, double min_distance_m, double max_distance_m) {
+  if (image.type() != CV_8U || image.size() != sweep.label.size() || sweep.distance_m.size() != image.size()) {
+    throw Error("SweepPicture: a grey image and a sweep of its size expected");
+  }
+  if (!(min_distance_m > 0 && max_distance_m > min_distance_m)) {
+    throw Error(Str("SweepPicture: distances ", min_distance_m, "..", max_distance_m, " m: expected 0 < min < max"));
+  }
+  // Turbo colours: index 0 (blue) far, 255 (red) near, even in inverse distance.
+  cv::Mat ramp(1, 256, CV_8U), turbo;
+  for (int i = 0; i < 256; ++i) ramp.at<std::uint8_t>(0, i) = static_cast<std::uint8_t>(i);
+  cv::applyColorMap(ramp, turbo, cv::COLORMAP_TURBO);
+  const double near_inv = 1.0 / min_distance_m, far_inv = 1.0 / max_distance_m;
+  cv::Mat out(image.size(), CV_8UC3);
+  for (int y = 0; y < image.rows; ++y) {
+    const std::uint8_t* g = image.ptr<std::uint8_t>(y);
+    const std::uint8_t* l = sweep.label.ptr<std::uint8_t>(y);
+    const float* d = sweep.distance_m.ptr<float>(y);
+    cv::Vec3b* o = out.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < image.cols; ++x) {
+      const std::uint8_t v = g[x];
+      switch (l[x]) {
+        case kSweepObstacle: {
+          const double f = std::isfinite(d[x]) ? (1.0 / d[x] - far_inv) / (near_inv - far_inv) : 0.0;
+          o[x] = turbo.at<cv::Vec3b>(0, std::clamp(static_cast<int>(std::lround(255 * f)), 0, 255));
+          break;
+        }
+        case kSweepRoad: o[x] = cv::Vec3b(static_cast<std::uint8_t>(v / 2), static_cast<std::uint8_t>(v / 2 + 100),
+                                          static_cast<std::uint8_t>(v / 2)); break;
+        case kSweepUnobservable: o[x] = cv::Vec3b(static_cast<std::uint8_t>(v / 2 + 90), static_cast<std::uint8_t>(v / 2),
+                                                  static_cast<std::uint8_t>(v / 2 + 90)); break;
+        case kSweepAmbiguous: o[x] = cv::Vec3b(v, v, v); break;
+        default: o[x] = cv::Vec3b(0, 0, 0);
+      }
+    }
+  }
+  // Legend: the colour ramp with its distances, and the labels' tints.
+  const double scale = std::max(0.35, image.cols / 1600.0);
+  const int line = static_cast<int>(std::lround(28 * scale / 0.5)), bar = std::max(64, image.cols / 4);
+  const cv::Rect box(0, 0, bar + 2 * line, 5 * line);
+  out(box & cv::Rect(0, 0, out.cols, out.rows)).setTo(cv::Scalar(30, 30, 30));
+  for (int i = 0; i < bar && line + i < out.cols; ++i) {
+    const cv::Vec3b c = turbo.at<cv::Vec3b>(0, 255 - 255 * i / std::max(1, bar - 1));
+    cv::line(out, {line / 2 + i, line / 3}, {line / 2 + i, line}, cv::Scalar(c[0], c[1], c[2]));
+  }
+  const auto text = [&](const std::string& s, int row, const cv::Scalar& colour) {
+    cv::putText(out, s, {line / 2, line * (row + 1) + line / 2}, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
+  };
+  text(Str("obstacle ", min_distance_m, " m .. ", max_distance_m, " m"), 1, cv::Scalar(255, 255, 255));
+  text("road (free)", 2, cv::Scalar(60, 200, 60));
+  text("unobservable (epipole)", 3, cv::Scalar(220, 90, 220));
+  return out;
+}
+
 }  // namespace dps
