@@ -231,12 +231,16 @@ bad(marks_same_point "marks_same_point.csv: camera 'left': line 1: its 3 points 
 file(WRITE "${WORK}/det_nan.csv" "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n0,0,front,0,nan,5,5,-1,1,4,6,10\n")
 bad(detections_nan "det_nan.csv:2: column 'x': not a finite number" "-" "${TOOLS}/dps-eval" --detections "${WORK}/det_nan.csv"
     --truth "${WORK}/good/truth.csv")
+file(WRITE "${WORK}/truth_empty.csv" "frame,t,id,kind,x,z,heading_deg,length,width,height,vx,vz\n")
 file(WRITE "${WORK}/det_other.csv" "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n1,7.5,front,0,0,5,5,-1,1,4,6,10\n")
 bad(detections_other_drive "det_other.csv: frame 1 is at t = 7.5 s, in .*truth.csv at .*not the same drive" "-"
     "${TOOLS}/dps-eval" --detections "${WORK}/det_other.csv" --truth "${WORK}/good/truth.csv")
 file(WRITE "${WORK}/det_huge.csv" "frame,t,source,id,x,z,range,x_min,x_max,z_min,z_max,n_points\n1e300,0,front,0,0,5,5,-1,1,4,6,10\n")
 bad(detections_huge "det_huge.csv:2: column 'frame'" "-" "${TOOLS}/dps-eval" --detections "${WORK}/det_huge.csv"
     --truth "${WORK}/good/truth.csv" --rig "${WORK}/good/rig.yaml")
+file(WRITE "${WORK}/frames_short.csv" "frame,t\n0,0\n")
+bad(detections_beyond_frames "det_other.csv: frame 1 but .*frames_short.csv lists 1 frames" "-" "${TOOLS}/dps-eval"
+    --detections "${WORK}/det_other.csv" --truth "${WORK}/truth_empty.csv" --frames "${WORK}/frames_short.csv")
 file(WRITE "${WORK}/truth_bad.csv" "frame,t,id\n0,0,1\n")
 bad(truth_columns "truth_bad.csv: missing column" "-" "${TOOLS}/dps-eval" --detections "${WORK}/det_huge.csv"
     --truth "${WORK}/truth_bad.csv" --rig "${WORK}/good/rig.yaml")

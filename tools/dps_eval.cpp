@@ -109,13 +109,24 @@ int main(int argc, char** argv) {
       }
     }
     const std::vector<dps::TruthRow> truth = objects ? dps::ReadTruth(args.Get("truth")) : std::vector<dps::TruthRow>{};
+    // A file of frames beyond the drive's frames.csv belongs to another drive.
+    const auto within_drive = [&](int frame, const std::string& file) {
+      if (options.frame_count > 0 && frame >= options.frame_count) {
+        throw dps::Error(dps::Str(file, ": frame ", frame, " but ", args.Get("frames"), " lists ", options.frame_count,
+                                  " frames (another drive's file?)"));
+      }
+    };
+    for (const dps::TruthRow& t : truth) within_drive(t.frame, args.Get("truth"));
     // The JSON parts: detections alone are written as their object; with tracks or lanes, an object
     // holding each part (null where absent).
     std::string detections_json = "null", tracks_json, lanes_json, errors;
     if (args.Has("detections")) {
       const std::vector<dps::Detection> detections = dps::ReadDetections(args.Get("detections"));
       std::vector<std::pair<int, double>> frames;
-      for (const dps::Detection& d : detections) frames.emplace_back(d.frame, d.t_s);
+      for (const dps::Detection& d : detections) {
+        frames.emplace_back(d.frame, d.t_s);
+        within_drive(d.frame, args.Get("detections"));
+      }
       dps::CheckSameDrive(frames, truth, args.Get("detections"), args.Get("truth"));
       const dps::EvaluationResult r = dps::Evaluate(detections, truth, options);
       std::cout << dps::EvaluationTable(r);
@@ -125,7 +136,10 @@ int main(int argc, char** argv) {
     if (args.Has("tracks")) {
       const std::vector<dps::TrackState> tracks = dps::ReadTracks(args.Get("tracks"));
       std::vector<std::pair<int, double>> frames;
-      for (const dps::TrackState& t : tracks) frames.emplace_back(t.frame, t.t_s);
+      for (const dps::TrackState& t : tracks) {
+        frames.emplace_back(t.frame, t.t_s);
+        within_drive(t.frame, args.Get("tracks"));
+      }
       dps::CheckSameDrive(frames, truth, args.Get("tracks"), args.Get("truth"));
       const dps::TrackEvaluation r = dps::EvaluateTracks(tracks, truth, options);
       std::cout << "tracks:\n" << dps::EvaluationTable(r.positions);

@@ -97,14 +97,14 @@ class PlaneSweeper {
 };
 
 // A one-off sweep (PlaneSweeper with no region).
+SweepResult PlaneSweep(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& previous,
+                       const cv::Mat& current, const Pose& previous_from_current, const cv::Mat& valid,
+                       const PlaneSweepOptions& options = {});
+
 // A picture of one sweep over the camera's image (grey, CV_8U): obstacle pixels coloured by their
 // distance (turbo, red at min_distance_m to blue at max_distance_m, even in inverse distance), road
 // pixels tinted green, the unobservable wedges about the epipoles magenta, ambiguous pixels the
 // image in grey, no ray black; a legend in the top-left corner. CV_8UC3 of the image's size.
 cv::Mat SweepPicture(const cv::Mat& image, const SweepResult& sweep, double min_distance_m, double max_distance_m);
-
-SweepResult PlaneSweep(const CameraModel& model, const Pose& vehicle_from_camera, const cv::Mat& previous,
-                       const cv::Mat& current, const Pose& previous_from_current, const cv::Mat& valid,
-                       const PlaneSweepOptions& options = {});
 
 }  // namespace dps
