@@ -87,7 +87,7 @@ int main() {
   CHECK(Run(sweep + " --frame 0 --out '" + (kWork / "bad").string() + "'", &err) != 0);
   CHECK(err.find("frame - back >= 0") != std::string::npos);
   CHECK(Run(sweep + " --frame 99 --out '" + (kWork / "bad").string() + "'", &err) != 0);
-  CHECK(err.find("frames.csv: lists 8 frames") != std::string::npos);
+  CHECK(err.find("frames.csv: lists 8 frames, no frame 99") != std::string::npos);
   CHECK(Run(sweep + " --frame 3 --camera middle --out '" + (kWork / "bad").string() + "'", &err) != 0);
   CHECK(err.find("no camera 'middle'") != std::string::npos);
   CHECK(!fs::exists(kWork / "bad"));

@@ -60,18 +60,21 @@ std::pair<cv::Mat, cv::Mat> ReadPair(const std::string& drive, const dps::RigCam
   return {dps::GreyImage(earlier), dps::GreyImage(current)};
 }
 
-// The time of frame `index` (by position): frames.csv, else the video's frame rate or --image-fps.
-double FrameTime(const std::string& drive, const dps::RigCamera& camera, int index, double image_fps) {
+// The times of frames `earlier` and `current` (by position): frames.csv, read once, else the
+// camera's video frame rate or --image-fps.
+std::pair<double, double> FrameTimes(const std::string& drive, const dps::RigCamera& camera, int earlier, int current,
+                                     double image_fps) {
   const fs::path frames = fs::path(drive) / "frames.csv";
   if (fs::exists(frames)) {
     const std::vector<double> times = dps::ReadFrameTimes(frames.string());
-    if (index >= static_cast<int>(times.size())) {
-      throw dps::Error(dps::Str(frames.string(), ": lists ", times.size(), " frames, no frame ", index));
+    if (current >= static_cast<int>(times.size())) {
+      throw dps::Error(dps::Str(frames.string(), ": lists ", times.size(), " frames, no frame ", current));
     }
-    return times[static_cast<size_t>(index)];
+    return {times[static_cast<size_t>(earlier)], times[static_cast<size_t>(current)]};
   }
   const double fps = dps::FrameSource::Open(drive, camera.name, true)->fps();
-  return index / (fps > 0 ? fps : image_fps);
+  const double rate = fps > 0 ? fps : image_fps;
+  return {earlier / rate, current / rate};
 }
 
 }  // namespace
@@ -104,7 +107,7 @@ int main(int argc, char** argv) {
       if (args.Has("camera") && camera.name != args.Get("camera")) continue;
       const fs::path mask = fs::path(drive) / "masks" / (camera.name + ".png");
       if (fs::exists(mask)) camera.mask = dps::ReadCameraMask(mask.string(), camera.model);
-      const double t0 = FrameTime(drive, camera, frame - back, image_fps), t1 = FrameTime(drive, camera, frame, image_fps);
+      const auto [t0, t1] = FrameTimes(drive, camera, frame - back, frame, image_fps);
       dps::PlanarPose moved;
       std::string why;
       if (!dps::MotionBetween(can, t0, t1, &moved, &why)) {
