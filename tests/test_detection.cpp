@@ -271,7 +271,7 @@ dps::Rig ForwardCameraRig() {
   K << 300, 0, 319.5, 0, 300, 239.5, 0, 0, 1;
   dps::Pose pose;
   pose.t = Eigen::Vector3d(0, -1.2, 2.5);
-  rig.cameras.push_back({"front", dps::CameraModel::Unified(640, 480, K, 0.0), pose, cv::Mat(), ""});
+  rig.cameras.push_back({"front", dps::CameraModel::Unified(640, 480, K, 0.0), pose, cv::Mat(), "", cv::Mat()});
   return rig;
 }
 

@@ -157,6 +157,16 @@ void CheckEstimatedMasks(const dps::DriveSummary& s, const fs::path& drive, cons
       }
     }
     CHECK_EQ(wrong, 0);
+    // The own car apart (the car drives off, so it is estimated; test_valid_mask checks it against
+    // the renderer's own car), written beside the mask.
+    const cv::Mat own = cv::imread((out / "masks" / (std::string(name) + "_own_car.png")).string(), cv::IMREAD_GRAYSCALE);
+    CHECK_EQ(s.masks.at(name).own_car_source, std::string("estimated"));
+    CHECK(!own.empty());
+    if (!own.empty()) {
+      std::printf("%s: own car %.3f of the pixels\n", name, s.masks.at(name).own_car_fraction);
+      CHECK(s.masks.at(name).own_car_fraction > 0.01);
+      CHECK_NEAR(s.masks.at(name).own_car_fraction, cv::countNonZero(own) / static_cast<double>(own.total()), 1e-9);
+    }
     CHECK_NEAR(s.masks.at(name).valid_fraction, cv::countNonZero(mask) / static_cast<double>(mask.total()), 1e-9);
   }
   CHECK(s.ToJson().find("\"masks\": {\"left\": {\"source\": \"estimated\"") != std::string::npos);
@@ -175,6 +185,18 @@ void CheckDriveMask(const fs::path& drive, const fs::path& out_root, const dps::
   CHECK_EQ(s.masks.at("right").source, std::string("estimated"));
   const cv::Mat used = cv::imread((out_root / drive.filename() / "masks" / "left.png").string(), cv::IMREAD_GRAYSCALE);
   CHECK(!used.empty() && cv::countNonZero(used.rowRange(0, m.height() / 3)) == 0);
+  // The own car likewise: a drive's masks/<camera>_own_car.png instead of the estimate.
+  cv::Mat own(m.height(), m.width(), CV_8U, cv::Scalar(0));
+  own.rowRange(m.height() * 3 / 4, m.height()).setTo(255);
+  cv::imwrite((drive / "masks" / "right_own_car.png").string(), own);
+  const dps::DriveSummary with_own = dps::ProcessDrive(drive.string(), (out_root / "own").string(), o);
+  CHECK_EQ(with_own.masks.at("right").own_car_source, std::string("drive"));
+  CHECK_NEAR(with_own.masks.at("right").own_car_fraction, 0.25, 1e-9);
+  CHECK_EQ(with_own.masks.at("left").own_car_source, std::string("estimated"));
+  const cv::Mat own_used =
+      cv::imread((out_root / "own" / drive.filename() / "masks" / "right_own_car.png").string(), cv::IMREAD_GRAYSCALE);
+  CHECK(!own_used.empty() && cv::countNonZero(own_used != own) == 0);
+  fs::remove(drive / "masks" / "right_own_car.png");
   cv::imwrite((drive / "masks" / "left.png").string(), cv::Mat(8, 8, CV_8U, cv::Scalar(255)));
   CHECK_THROWS_WITH(dps::ProcessDrive(drive.string(), (out_root / "bad").string(), o), dps::Error,
                     "left.png: the mask is 8x8");

@@ -122,7 +122,7 @@ void TestWriteReadRoundTrip() {
   dps::Pose pose;
   pose.R = dps::AxisAngle({0.3, -0.2, 0.9}, 1.2345678901234);
   pose.t = {0.1 / 3.0, -1.0 / 7.0, 2.0 / 3.0};
-  rig.cameras.push_back({"rear", dps::CameraModel::Unified(800, 600, K, 0.912345678901), pose, cv::Mat(), ""});
+  rig.cameras.push_back({"rear", dps::CameraModel::Unified(800, 600, K, 0.912345678901), pose, cv::Mat(), "", cv::Mat()});
   rig.vehicle.width_m = 1.95;
   const std::string path = (kTmp / "written.yaml").string();
   dps::WriteRig(rig, path);
@@ -242,7 +242,7 @@ void TestOpenCVReaders() {
   CHECK_NEAR(distorted.dist()[1], 0.05, 0);
   dps::Rig with_dist;
   dps::Pose identity;
-  with_dist.cameras.push_back({"left", distorted, identity, cv::Mat(), ""});
+  with_dist.cameras.push_back({"left", distorted, identity, cv::Mat(), "", cv::Mat()});
   dps::WriteRig(with_dist, (kTmp / "rig_dist.yaml").string());
   const dps::CameraModel back = dps::ReadRig((kTmp / "rig_dist.yaml").string()).Camera("left").model;
   CHECK(back.dist() == distorted.dist());

@@ -17,7 +17,9 @@ right.<ext> videos, can.csv, optional frames.csv) into OUT_DIR/<drive folder nam
 detections.csv, tracks.csv, map.mp4 (the surround map video, H.264 or MPEG-4; map.avi with MJPG,
 or map/ PNGs, when OpenCV has no such encoder), summary.json and masks/<camera>.png (the pixels
 each camera was taken to see the world with: from the drive's masks/, rig.yaml's `mask:`, or
-estimated from the drive's first seconds; correct one and put it into the drive's masks/).
+estimated from the drive's first seconds) with masks/<camera>_own_car.png (the own car it was
+taken to see, from the drive's masks/ or estimated when the car moves in those seconds; no
+obstacle is taken from it). Correct one and put it into the drive's masks/.
 Outputs appear only when complete; drives already complete are skipped (--force redoes them).
 One bad drive is reported and the others still run; the exit status is the number that failed.
 
@@ -39,7 +41,8 @@ One bad drive is reported and the others still run; the exit status is the numbe
                         consecutive frames in frames.csv more than 1.5 median intervals apart -
                         is processed across with a warning instead of failing the drive: the
                         frame numbers both cameras have, at their own times (never by position)
-  --no-mask-estimate    cameras without a mask: the model's field alone (no estimate from the images)
+  --no-mask-estimate    cameras without a mask: the model's field alone, and no own car (no estimate
+                        from the images)
   --mask-seconds S      estimate masks from the first S seconds (default 2)
   --image-fps F         frame rate of image folders without frames.csv (default 30)
   --speed-column NAME   CAN column with the speed (default speed)

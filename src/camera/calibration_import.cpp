@@ -488,7 +488,7 @@ Rig ImportRig(const ImportOptions& o, std::vector<std::string>* notes) {
                  ", ", o.nominal_height_m, " m above the road (the files have no extrinsics; refine with dps-calibrate)");
     }
     if (notes) notes->push_back(name + ": pose " + note);
-    rig.cameras.push_back(RigCamera{name, std::move(s.model), *s.vehicle_from_camera, cv::Mat(), std::string()});
+    rig.cameras.push_back(RigCamera{name, std::move(s.model), *s.vehicle_from_camera, cv::Mat(), std::string(), cv::Mat()});
   }
   return rig;
 }

@@ -153,7 +153,7 @@ Rig ParseRig(const cv::FileNode& root, const std::string& path) {
     pose.t = f.Matrix("t", 3, 1);
     const std::string problem = RotationProblem(pose.R, 1e-6);
     if (!problem.empty()) f.Fail("R", problem);
-    RigCamera camera{name, std::move(model), pose, cv::Mat(), std::string()};
+    RigCamera camera{name, std::move(model), pose, cv::Mat(), std::string(), cv::Mat()};
     if (f.Has("mask")) camera.mask_file = f.Text("mask");
     rig.cameras.push_back(std::move(camera));
     ++index;

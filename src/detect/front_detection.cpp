@@ -83,6 +83,9 @@ void FrontDetector::PrepareReferences() {
 void FrontDetector::Prepare(const cv::Mat& own_car, Reference* ref) const {
   const VirtualView& view = *ref->view;
   cv::bitwise_or(own_car, view.mask() == 0, ref->ignore);
+  // The reference camera's own car as estimated from the drive (its pixels only: the other view's
+  // pixels at the same coordinates see other things).
+  if (!view.own_car().empty()) ref->ignore |= view.own_car();
   ref->road = RoadDisparity(view, baseline_m_);
   ref->ramp = RoadRamp(ref->road, options_.stereo.block_height / 2 + 1);
 }

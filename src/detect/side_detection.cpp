@@ -282,6 +282,7 @@ const SideDetector::ViewGeometry& SideDetector::Geometry(const VirtualView& view
   ViewGeometry g;
   g.ignore = OwnCarMask(view, vehicle_, options_.own_car_height_m);
   cv::bitwise_or(g.ignore, view.mask() == 0, g.ignore);
+  if (!view.own_car().empty()) g.ignore |= view.own_car();  // as estimated from the drive
   // Matched as prepared: mirrored for the left side.
   g.valid = view.mask().clone();
   if (side_ == Side::kLeft) cv::flip(g.valid, g.valid, 1);

@@ -52,7 +52,8 @@ std::string DriveSummary::ToJson() const {
   bool first_mask = true;
   for (const auto& [camera, m] : masks) {
     o << (first_mask ? "" : ", ") << JsonString(camera) << ": {\"source\": " << JsonString(m.source)
-      << ", \"valid_fraction\": " << m.valid_fraction << "}";
+      << ", \"valid_fraction\": " << m.valid_fraction << ", \"own_car\": " << JsonString(m.own_car_source)
+      << ", \"own_car_fraction\": " << m.own_car_fraction << "}";
     first_mask = false;
   }
   o << "}";
@@ -189,39 +190,63 @@ std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& 
 }
 
 // Each camera's mask (DESIGN.md §3.2): the drive's masks/<camera>.png, else rig.yaml's, else
-// estimated from the drive's first seconds. Returns each camera's valid pixels (CameraValidMask).
-std::map<std::string, cv::Mat> AttachMasks(const std::string& drive_dir, const DriveOptions& o, DriveInput* in,
-                                           DriveSummary* s) {
-  std::map<std::string, cv::Mat> valid_masks;
+// estimated from the drive's first seconds; and its own car: the drive's
+// masks/<camera>_own_car.png, else estimated from the same frames when the car moved over them.
+// Returns, by camera name, its valid pixels (CameraValidMask) and its own car (empty: none).
+std::map<std::string, std::pair<cv::Mat, cv::Mat>> AttachMasks(const std::string& drive_dir, const DriveOptions& o,
+                                                               DriveInput* in, DriveSummary* s) {
+  std::map<std::string, std::pair<cv::Mat, cv::Mat>> masks;
   for (RigCamera& camera : in->rig.cameras) {
     if (camera.name != "left" && camera.name != "right") continue;
-    const fs::path file = fs::path(drive_dir) / "masks" / (camera.name + ".png");
+    const fs::path dir = fs::path(drive_dir) / "masks";
+    const fs::path file = dir / (camera.name + ".png"), own_file = dir / (camera.name + "_own_car.png");
     MaskSummary& m = s->masks[camera.name];
+    const bool estimate = o.estimate_masks && in->frames > 0;
+    std::vector<cv::Mat> frames;
+    if (estimate) frames = FirstFrames(drive_dir, camera, *in, o.mask_estimate_s);
     if (fs::exists(file)) {
       camera.mask = ReadCameraMask(file.string(), camera.model);
       m.source = "drive";
     } else if (!camera.mask.empty()) {
       m.source = "rig.yaml";
-    } else if (o.estimate_masks && in->frames > 0) {
-      camera.mask = EstimateFieldMask(FirstFrames(drive_dir, camera, *in, o.mask_estimate_s), camera.model,
-                                      o.field_mask);
+    } else if (estimate) {
+      camera.mask = EstimateFieldMask(frames, camera.model, o.field_mask);
       m.source = "estimated";
     } else {
       m.source = "model";
     }
+    if (fs::exists(own_file)) {
+      camera.own_car = ReadCameraMask(own_file.string(), camera.model);
+      m.own_car_source = "drive";
+    } else if (estimate) {
+      // From how far the car travelled over those frames (none known: no estimate).
+      PlanarPose moved;
+      std::string why;
+      if (MotionBetween(in->can, in->times[0], in->times[frames.size() - 1], &moved, &why)) {
+        camera.own_car = EstimateOwnCarMask(frames, camera, in->rig.vehicle, std::hypot(moved.x_m, moved.z_m),
+                                            o.own_car_mask);
+      }
+      if (!camera.own_car.empty()) m.own_car_source = "estimated";
+    }
+    if (!camera.own_car.empty()) {
+      m.own_car_fraction = static_cast<double>(cv::countNonZero(camera.own_car)) / static_cast<double>(camera.own_car.total());
+    }
     const cv::Mat valid = CameraValidMask(camera);
     m.valid_fraction = static_cast<double>(cv::countNonZero(valid)) / static_cast<double>(valid.total());
-    valid_masks[camera.name] = valid;
+    masks[camera.name] = {valid, camera.own_car};
   }
-  return valid_masks;
+  return masks;
 }
 
 // The masks used, as pictures a user can check and correct (and put into the drive's masks/).
-void WriteMasks(const std::map<std::string, cv::Mat>& valid_masks, const fs::path& dir) {
+void WriteMasks(const std::map<std::string, std::pair<cv::Mat, cv::Mat>>& masks, const fs::path& dir) {
   fs::create_directories(dir);
-  for (const auto& [name, valid] : valid_masks) {
-    const std::string path = (dir / (name + ".png")).string();
-    if (!cv::imwrite(path, valid)) throw Error(Str(path, ": cannot write the mask"));
+  for (const auto& [name, mask] : masks) {
+    for (const auto& [suffix, image] : {std::pair<const char*, const cv::Mat&>{".png", mask.first},
+                                        std::pair<const char*, const cv::Mat&>{"_own_car.png", mask.second}}) {
+      const std::string path = (dir / (name + suffix)).string();
+      if (!image.empty() && !cv::imwrite(path, image)) throw Error(Str(path, ": cannot write the mask"));
+    }
   }
 }
 
@@ -528,6 +553,7 @@ void DriveOptions::Check() const {
   tracker.Check();
   occupancy.Check();
   field_mask.Check();
+  own_car_mask.Check();
 }
 
 DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_root, const DriveOptions& o,
@@ -540,14 +566,14 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   CheckOutputFolder(s.output_dir, {drive_dir});
   CheckReplaceable(s.output_dir, "summary.json");
   DriveInput in = OpenDrive(drive_dir, o, &s);
-  const std::map<std::string, cv::Mat> valid_masks = AttachMasks(drive_dir, o, &in, &s);
+  const std::map<std::string, std::pair<cv::Mat, cv::Mat>> masks = AttachMasks(drive_dir, o, &in, &s);
   // Outputs under a temporary name.
   fs::create_directories(out_root);
   const fs::path tmp = TemporaryFolderFor(s.output_dir);  // (and killed runs' ones removed)
   fs::remove_all(tmp);
   fs::create_directories(tmp);
   try {
-    WriteMasks(valid_masks, tmp / "masks");
+    WriteMasks(masks, tmp / "masks");
     DriveRun run(drive_dir, o, in, tmp, &s);
     run.Run(progress);
     run.WriteFiles();

@@ -83,6 +83,7 @@ VirtualView::VirtualView(const RigCamera& camera, const ViewSpec& spec)
   const CameraModel& model = camera.model;
   map_float_.create(spec.height, spec.width, CV_32FC2);
   mask_.create(spec.height, spec.width, CV_8U);
+  if (!camera.own_car.empty()) own_car_.create(spec.height, spec.width, CV_8U);
   cv::parallel_for_(cv::Range(0, spec.height), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       cv::Vec2f* m = map_float_.ptr<cv::Vec2f>(y);
@@ -96,6 +97,11 @@ VirtualView::VirtualView(const RigCamera& camera, const ViewSpec& spec)
         } else {
           m[x] = cv::Vec2f(-1.0f, -1.0f);
           k[x] = 0;
+        }
+        if (!own_car_.empty()) {
+          const int u = std::clamp(static_cast<int>(std::lround(px.x())), 0, camera.own_car.cols - 1);
+          const int v = std::clamp(static_cast<int>(std::lround(px.y())), 0, camera.own_car.rows - 1);
+          own_car_.at<std::uint8_t>(y, x) = k[x] && camera.own_car.at<std::uint8_t>(v, u) ? 255 : 0;
         }
       }
     }

@@ -54,6 +54,10 @@ struct RigCamera {
   // does: beyond the mirror's or lens's field, the own car). Empty: the model's domain alone.
   cv::Mat mask;
   std::string mask_file;            // the file rig.yaml names for it (as written there), or empty
+  // Optional: the own car as estimated from a drive's images (EstimateOwnCarMask; CV_8U of the
+  // model's size, 255 = the own car). Not in rig.yaml. Unlike `mask`, it does not stop matching
+  // windows at its edge: the detectors only take no obstacle from it (OwnCarMask).
+  cv::Mat own_car;
 };
 
 // The vehicle and its cameras, as in rig.yaml (DESIGN.md §3.1).

@@ -41,6 +41,9 @@ struct DriveOptions {
   bool estimate_masks = true;
   double mask_estimate_s = 2.0;   // > 0
   FieldMaskOptions field_mask;
+  // ... and, for cameras without masks/<camera>_own_car.png in the drive, the own car from the
+  // same frames (EstimateOwnCarMask), when the car moved over them.
+  OwnCarMaskOptions own_car_mask;
 
   // Throws dps::Error naming the field, its value and the violated constraint (the nested options
   // included; `pipeline` only when it is used).
@@ -51,6 +54,11 @@ struct DriveOptions {
 struct MaskSummary {
   std::string source;             // "drive" (masks/<camera>.png), "rig.yaml", "estimated", "model"
   double valid_fraction = 0.0;
+  // Where its own car came from: "drive" (masks/<camera>_own_car.png), "estimated" or "none" (the
+  // car did not move over the frames the masks are estimated from, or nothing told it apart), and
+  // the share of its pixels that see the own car.
+  std::string own_car_source = "none";
+  double own_car_fraction = 0.0;
 };
 
 struct DriveSummary {

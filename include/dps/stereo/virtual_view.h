@@ -71,6 +71,9 @@ class VirtualView {
 
   // CV_8U, 255 where the view pixel has an omni source.
   const cv::Mat& mask() const { return mask_; }
+  // CV_8U, 255 where that source is the camera's estimated own car (RigCamera::own_car); empty
+  // without one.
+  const cv::Mat& own_car() const { return own_car_; }
   const ViewSpec& spec() const { return spec_; }
   // The view pixel's ray in the vehicle frame (unit).
   Eigen::Vector3d RayVehicle(double x, double y) const;
@@ -87,6 +90,7 @@ class VirtualView {
   cv::Mat map_float_;   // CV_32FC2
   cv::Mat map1_, map2_; // fixed-point maps for cv::remap
   cv::Mat mask_;
+  cv::Mat own_car_;
 };
 
 // Side views of one camera for many yaws, built on demand and kept for the most recent
@@ -120,6 +124,7 @@ class SideViewCache {
 // CV_8U, 255 where the view pixel's ray meets the own car, modelled as a box of the rig's
 // vehicle length and width and `height_m` (metres above the road) around the vehicle origin:
 // the bonnet and doors that every mirror-mounted camera sees, which must not count as obstacles.
+// (The camera's own car as estimated from a drive is VirtualView::own_car.)
 cv::Mat OwnCarMask(const VirtualView& view, const Vehicle& vehicle, double height_m);
 
 // The vertical misalignment of a rectified pair: the median row shift of the right view relative
