@@ -1,5 +1,6 @@
 // Valid-pixel masks: the field's edge estimated from images (synthetic with a known edge, and a
 // real fisheye), masks in rig.yaml and views, and stereo that never matches across the edge.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -138,6 +139,34 @@ void TestRigMask() {
   }
   CHECK_EQ(sourced_in_masked, 0);
   CHECK(cv::countNonZero(with.mask()) < cv::countNonZero(without.mask()));
+  // The own car as estimated (RigCamera::own_car) does not take pixels from the view: it marks the
+  // view's pixels whose source it holds.
+  const dps::VirtualView plain(rig.Camera("left"), spec);
+  std::vector<float> rows;  // the source rows the view takes
+  for (int y = 0; y < spec.height; ++y) {
+    for (int x = 0; x < spec.width; ++x) {
+      if (plain.mask().at<std::uint8_t>(y, x)) rows.push_back(plain.omni_coordinates().at<cv::Vec2f>(y, x)[1]);
+    }
+  }
+  std::nth_element(rows.begin(), rows.begin() + static_cast<long>(rows.size() / 2), rows.end());
+  const int split = static_cast<int>(std::lround(rows[rows.size() / 2]));
+  dps::RigCamera with_car = rig.Camera("left");
+  with_car.own_car = cv::Mat(mask.size(), CV_8U, cv::Scalar(0));
+  with_car.own_car.rowRange(split, mask.rows).setTo(255);  // below the view's median source row
+  const dps::VirtualView car_view(with_car, spec);
+  CHECK(plain.own_car().empty());
+  CHECK_EQ(cv::countNonZero(car_view.mask() != plain.mask()), 0);
+  int wrong = 0, marked = 0;
+  for (int y = 0; y < spec.height; ++y) {
+    for (int x = 0; x < spec.width; ++x) {
+      const cv::Vec2f p = car_view.omni_coordinates().at<cv::Vec2f>(y, x);
+      const bool lower = car_view.mask().at<std::uint8_t>(y, x) && std::lround(p[1]) >= split;
+      wrong += lower != (car_view.own_car().at<std::uint8_t>(y, x) != 0);
+      marked += lower;
+    }
+  }
+  CHECK_EQ(wrong, 0);
+  CHECK(marked > 0);
   // A mask of the wrong size names the file.
   cv::imwrite((dir / "masks" / "left.png").string(), cv::Mat(10, 20, CV_8U, cv::Scalar(255)));
   CHECK_THROWS_WITH(dps::ReadRig((dir / "rig.yaml").string()), dps::Error, "left.png: the mask is 20x10");

@@ -99,9 +99,13 @@ VirtualView::VirtualView(const RigCamera& camera, const ViewSpec& spec)
           k[x] = 0;
         }
         if (!own_car_.empty()) {
-          const int u = std::clamp(static_cast<int>(std::lround(px.x())), 0, camera.own_car.cols - 1);
-          const int v = std::clamp(static_cast<int>(std::lround(px.y())), 0, camera.own_car.rows - 1);
-          own_car_.at<std::uint8_t>(y, x) = k[x] && camera.own_car.at<std::uint8_t>(v, u) ? 255 : 0;
+          std::uint8_t own = 0;
+          if (k[x]) {
+            const int u = std::clamp(static_cast<int>(std::lround(px.x())), 0, camera.own_car.cols - 1);
+            const int v = std::clamp(static_cast<int>(std::lround(px.y())), 0, camera.own_car.rows - 1);
+            own = camera.own_car.at<std::uint8_t>(v, u) ? 255 : 0;
+          }
+          own_car_.at<std::uint8_t>(y, x) = own;
         }
       }
     }
