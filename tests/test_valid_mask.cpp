@@ -1,5 +1,6 @@
 // Valid-pixel masks: the field's edge estimated from images (synthetic with a known edge, and a
-// real fisheye), masks in rig.yaml and views, and stereo that never matches across the edge.
+// real fisheye), masks in rig.yaml and views, and stereo that never matches across the edge; the
+// own car estimated from rendered drives against the renderer's record of it.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
