@@ -2,10 +2,11 @@
 // (same disparity range and block size), with and without the left-right check, the virtual
 // view rectification, and the whole per-frame pipeline (what dps-process does between decoding
 // the images and encoding the map) against one StereoBM call at the same omni size, and the plane
-// sweep (one camera, one earlier frame) beside a plain SAD cost volume of the same size. Prints
-// Markdown tables for docs/performance.md.
+// sweep (one camera, one earlier frame) beside a plain SAD cost volume of the same size, and the
+// masks estimated once per drive. Prints Markdown tables for docs/performance.md.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -20,6 +21,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dps/camera/rig_io.h"
+#include "dps/camera/valid_mask.h"
 #include "dps/map/occupancy_grid.h"
 #include "dps/map/surround_map.h"
 #include "dps/map/tracker.h"
@@ -255,6 +257,27 @@ int main(int argc, char** argv) {
     const double pixels = static_cast<double>(ow) * oh, surfaces = so.distances + 1;
     std::printf("| %dx%d | %.1f | %.1f | %.2f | %.2f | %.0f |\n", ow, oh, sweep_ms, 1e6 * sweep_ms / (pixels * surfaces),
                 sad_ms, 1e6 * sad_ms / (pixels * st.num_disparities), sweep_ms / sad_ms);
+  }
+
+  // The masks dps-process estimates once per camera and drive from the first two seconds (every
+  // frame of them, as it does): the field's edge and the own car.
+  std::printf("\n| omni size | frames | field mask ms | own car ms |\n| --- | --- | --- | --- |\n");
+  for (const auto& [ow, oh] : {std::pair{320, 240}, std::pair{640, 480}}) {
+    dps::Scene scene = dps::ReadScene(scene_path);
+    dps::ResizeScene(&scene, ow, oh);
+    scene.render.supersample = 1;
+    const dps::SceneRenderer renderer(scene);
+    std::vector<cv::Mat> frames;
+    for (int f = 0; f < scene.FrameCount() && scene.FrameTime(f) <= 2.0; ++f) {
+      frames.push_back(renderer.Render(renderer.StateAt(scene.FrameTime(f)), 0, f).image);
+    }
+    const dps::FrameState first = renderer.StateAt(0.0), last = renderer.StateAt(scene.FrameTime(static_cast<int>(frames.size()) - 1));
+    const double travel = std::hypot(last.ego.x_m - first.ego.x_m, last.ego.z_m - first.ego.z_m);
+    const dps::RigCamera& cam = scene.rig.cameras[0];
+    const auto [field_ms, own_ms] = MedianMs(
+        7, [&] { dps::EstimateFieldMask(frames, cam.model); },
+        [&] { dps::EstimateOwnCarMask(frames, cam, scene.rig.vehicle, travel); });
+    std::printf("| %dx%d | %zu | %.1f | %.1f |\n", ow, oh, frames.size(), field_ms, own_ms);
   }
   return 0;
 }
