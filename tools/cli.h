@@ -58,6 +58,11 @@ class Args {
 
   bool help() const { return help_; }
   bool Has(const std::string& name) const { return values_.count(name) > 0; }
+  // A required option: "missing --name VALUE (see --help)" when it is absent (`value` names its
+  // value, e.g. "DIR"; empty: none named).
+  void Require(const std::string& name, const std::string& value = "") const {
+    if (!Has(name)) throw dps::Error("missing --" + name + (value.empty() ? "" : " " + value) + " (see --help)");
+  }
   std::string Get(const std::string& name, const std::string& fallback = "") const {
     const auto it = values_.find(name);
     return it == values_.end() ? fallback : it->second;

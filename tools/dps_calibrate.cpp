@@ -52,9 +52,8 @@ int main(int argc, char** argv) {
       std::cout << kUsage;
       return 0;
     }
-    for (const char* required : {"rig", "out"}) {
-      if (!args.Has(required)) throw dps::Error(std::string("missing --") + required + " (see --help)");
-    }
+    args.Require("rig");
+    args.Require("out");
     if (args.Has("marks") == args.Has("images")) throw dps::Error("give either --marks or --images (see --help)");
     if (args.Has("write-marks") && !args.Has("images")) throw dps::Error("--write-marks needs --images");
     if (!args.positional().empty()) throw dps::Error("unexpected argument '" + args.positional()[0] + "'");

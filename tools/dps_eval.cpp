@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
     if (args.Has("truth-lanes") && !args.Has("lanes") && !objects) {
       throw dps::Error("--truth-lanes needs --lanes, --detections or --tracks (see --help)");
     }
-    if (objects && !args.Has("truth")) throw dps::Error("missing --truth (see --help)");
+    if (objects) args.Require("truth");
     dps::EvaluationOptions options;
     options.max_range_m = args.Number("max-range", 20.0);
     if (!(options.max_range_m > 0)) throw dps::Error("option --max-range: expected > 0");

@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
       std::cout << kUsage;
       return 0;
     }
-    if (!args.Has("out")) throw dps::Error("missing --out OUT_DIR (see --help)");
+    args.Require("out", "OUT_DIR");
     std::vector<std::string> drives = args.positional();
     if (args.Has("list")) {
       for (const std::string& d : dps::ReadDriveList(args.Get("list"))) drives.push_back(d);

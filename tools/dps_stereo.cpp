@@ -53,8 +53,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args.positional().size() != 2) throw dps::Error("expected LEFT and RIGHT images (see --help)");
-    if (!args.Has("num-disparities")) throw dps::Error("missing --num-disparities N (see --help)");
-    if (!args.Has("out")) throw dps::Error("missing --out FILE (see --help)");
+    args.Require("num-disparities", "N");
+    args.Require("out", "FILE");
     dps::StereoOptions o;
     o.num_disparities = args.Integer("num-disparities", o.num_disparities);
     o.min_disparity = args.Integer("min-disparity", 0);

@@ -87,8 +87,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args.positional().size() != 1) throw dps::Error("expected one DRIVE_DIR (see --help)");
-    if (!args.Has("frame")) throw dps::Error("missing --frame N (see --help)");
-    if (!args.Has("out")) throw dps::Error("missing --out DIR (see --help)");
+    args.Require("frame", "N");
+    args.Require("out", "DIR");
     const std::string drive = args.positional()[0];
     const int frame = args.Integer("frame", 0), back = args.Integer("back", 1);
     if (back < 1 || frame - back < 0) {

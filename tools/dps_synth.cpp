@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args.positional().size() != 1) throw dps::Error("expected one scene file (see --help)");
-    if (!args.Has("out")) throw dps::Error("missing --out DIR (see --help)");
+    args.Require("out", "DIR");
     {
       std::vector<std::string> inputs{args.positional()[0]};
       for (const char* rig : {"rig", "processing-rig"}) {

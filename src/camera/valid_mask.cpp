@@ -216,23 +216,39 @@ cv::Mat EstimateOwnCarMask(const std::vector<cv::Mat>& frames, const RigCamera& 
   // its own. Far off, or seen at a grazing angle, the road's texture is not resolved and holds
   // still as the car does.
   cv::Mat footprint(valid.size(), CV_32F, cv::Scalar(std::numeric_limits<float>::infinity()));
-  const auto ground_of = [&](double x, double y, Eigen::Vector3d* ground) {
-    Eigen::Vector3d ray;
-    return model.Unproject(Eigen::Vector2d(x, y), &ray) && RayMeetsRoad(c, camera.vehicle_from_camera.R * ray, ground);
+  // Every pixel's ray in the vehicle frame and where it meets the road (NaN: nowhere), one column
+  // and row beyond the image for the last pixels' neighbours.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  cv::Mat rays(valid.rows + 1, valid.cols + 1, CV_64FC3, cv::Scalar::all(nan)), grounds = rays.clone();
+  cv::parallel_for_(cv::Range(0, rays.rows), [&](const cv::Range& rows) {
+    for (int y = rows.start; y < rows.end; ++y) {
+      for (int x = 0; x < rays.cols; ++x) {
+        Eigen::Vector3d ray, ground;
+        if (!model.Unproject(Eigen::Vector2d(x, y), &ray)) continue;
+        const Eigen::Vector3d d = camera.vehicle_from_camera.R * ray;
+        rays.at<cv::Vec3d>(y, x) = cv::Vec3d(d.x(), d.y(), d.z());
+        if (RayMeetsRoad(c, d, &ground)) grounds.at<cv::Vec3d>(y, x) = cv::Vec3d(ground.x(), ground.y(), ground.z());
+      }
+    }
+  });
+  const auto at = [](const cv::Mat& m, int x, int y) {
+    const cv::Vec3d v = m.at<cv::Vec3d>(y, x);
+    return Eigen::Vector3d(v[0], v[1], v[2]);
   };
+  const Pose camera_from_vehicle = camera.vehicle_from_camera.Inverse();
   cv::parallel_for_(cv::Range(0, valid.rows), [&](const cv::Range& rows) {
     for (int y = rows.start; y < rows.end; ++y) {
       for (int x = 0; x < valid.cols; ++x) {
-        Eigen::Vector3d ray, ground, right, below;
-        if (!valid.at<std::uint8_t>(y, x) || !model.Unproject(Eigen::Vector2d(x, y), &ray)) continue;
-        const Eigen::Vector3d d = camera.vehicle_from_camera.R * ray;
+        const Eigen::Vector3d d = at(rays, x, y), ground = at(grounds, x, y);
+        if (!valid.at<std::uint8_t>(y, x) || std::isnan(d.x())) continue;
         const bool cabin = RayMeetsBox(c, d, cabin_lo, cabin_hi);
-        if (!RayMeetsRoad(c, d, &ground)) {
+        if (std::isnan(ground.x())) {
           candidate.at<std::uint8_t>(y, x) = cabin ? 255 : 0;
           footprint.at<float>(y, x) = 0.0f;  // no road to resolve
           continue;
         }
-        if (ground_of(x + 1, y, &right) && ground_of(x, y + 1, &below)) {
+        const Eigen::Vector3d right = at(grounds, x + 1, y), below = at(grounds, x, y + 1);
+        if (!std::isnan(right.x()) && !std::isnan(below.x())) {
           footprint.at<float>(y, x) = static_cast<float>(std::max((right - ground).norm(), (below - ground).norm()));
         }
         if (std::abs(ground.x()) < hw && std::abs(ground.z()) < hl) seed.at<std::uint8_t>(y, x) = 255;
@@ -247,7 +263,7 @@ cv::Mat EstimateOwnCarMask(const std::vector<cv::Mat>& frames, const RigCamera& 
         // Were it the road, would it have moved far enough to change? (Not far off towards the
         // motion's epipoles, where the road holds still too.)
         Eigen::Vector2d moved;
-        const Eigen::Vector3d later = camera.vehicle_from_camera.Inverse().Apply(ground - Eigen::Vector3d(0, 0, travel_m));
+        const Eigen::Vector3d later = camera_from_vehicle.Apply(ground - Eigen::Vector3d(0, 0, travel_m));
         candidate.at<std::uint8_t>(y, x) = !model.Project(later, &moved) || (moved - Eigen::Vector2d(x, y)).norm() >= window ? 255 : 0;
       }
     }

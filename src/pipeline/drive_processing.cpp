@@ -202,8 +202,9 @@ std::map<std::string, std::pair<cv::Mat, cv::Mat>> AttachMasks(const std::string
     const fs::path file = dir / (camera.name + ".png"), own_file = dir / (camera.name + "_own_car.png");
     MaskSummary& m = s->masks[camera.name];
     const bool estimate = o.estimate_masks && in->frames > 0;
-    std::vector<cv::Mat> frames;
-    if (estimate) frames = FirstFrames(drive_dir, camera, *in, o.mask_estimate_s);
+    const bool field_given = fs::exists(file) || !camera.mask.empty(), own_given = fs::exists(own_file);
+    std::vector<cv::Mat> frames;  // read only when something is estimated from them
+    if (estimate && !(field_given && own_given)) frames = FirstFrames(drive_dir, camera, *in, o.mask_estimate_s);
     if (fs::exists(file)) {
       camera.mask = ReadCameraMask(file.string(), camera.model);
       m.source = "drive";
@@ -215,7 +216,7 @@ std::map<std::string, std::pair<cv::Mat, cv::Mat>> AttachMasks(const std::string
     } else {
       m.source = "model";
     }
-    if (fs::exists(own_file)) {
+    if (own_given) {
       camera.own_car = ReadCameraMask(own_file.string(), camera.model);
       m.own_car_source = "drive";
     } else if (estimate) {
