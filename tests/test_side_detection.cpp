@@ -1,8 +1,9 @@
 // Side obstacles by motion stereo (section V-B) on rendered frame pairs with known truth: a car
 // parked beside the road at 8 m/s and 15 fps (its disparity at full view size would exceed the
 // range, so the views shrink), a car overtaking on the left (placed where it is in the
-// current frame, not where it was in the previous one), a car keeping pace on the right, and
-// consecutive frames taking the last frame's view instead of rendering it again.
+// current frame, not where it was in the previous one), a car keeping pace on the right (from its
+// second pair on), and consecutive frames taking the last frame's view instead of rendering it
+// again.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -139,23 +140,51 @@ void TestOvertakingLeft() {
 // A car keeping pace with us two lanes to the right (its side 4.6 m from the right camera): its
 // disparity between the frames is about zero, so the depth x disparity test cannot sort out
 // columns whose bottom-most pixel is a stray match; one such column put a contact 3 m short of
-// the car, and it became the detection's nearest point.
+// the car, and it became the detection's nearest point. Something keeping pace stays where it
+// was in the vehicle frame, so it counts from its second frame on (pacing_persistence_m): not on
+// the first pair, nor on a pair that puts it 2 m from where the last pair had anything.
+std::vector<cv::Mat> RenderFrames(const dps::SceneObject& car, size_t camera, int frames, dps::PlanarPose* step,
+                                  double* interval_s, dps::TruthRow* last_truth, dps::Rig* rig) {
+  dps::Scene scene = dps_test::SmallScene("parked_cars", 640, 480);
+  scene.objects = {car};
+  const dps::SceneRenderer renderer(scene);
+  std::vector<cv::Mat> images;
+  for (int f = 0; f < frames; ++f) {
+    const dps::FrameState s = renderer.StateAt(scene.FrameTime(f));
+    images.push_back(renderer.Render(s, camera, f).image);
+    *last_truth = dps::TruthAt(s, f).at(0);
+  }
+  *step = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(0), scene.FrameTime(1));
+  *interval_s = scene.FrameTime(1) - scene.FrameTime(0);
+  *rig = scene.rig;
+  return images;
+}
+
 void TestPacingRight() {
   dps::SceneObject car;
   car.start.x_m = 6.5;
   car.start.z_m = 2.0;
   car.colour = 4;
   car.motion = dps::MotionProfile({dps::MotionSample{0.0, 8.0, 0.0}});  // our speed
-  const Pair p = Render(car, "right", 640, 480);
-  const dps::SideResult r = Detect(p, "right", dps::Side::kRight);
-  std::printf("car keeping pace, right camera, 640x480: %zu detection(s)\n", r.detections.size());
+  dps::PlanarPose step;
+  double dt = 0.0;
+  dps::TruthRow truth;
+  dps::Rig rig;
+  const std::vector<cv::Mat> images = RenderFrames(car, 1, 3, &step, &dt, &truth, &rig);
+  CHECK_EQ(rig.cameras[1].name, std::string("right"));
+  dps::SideDetector detector(rig, "right", dps::Side::kRight, dps::DefaultPipelineOptions(rig).side);
+  const dps::SideResult first = detector.Detect(images[0], images[1], step, dt);
+  const dps::SideResult r = detector.Detect(images[1], images[2], step, dt, true);
+  std::printf("car keeping pace, right camera, 640x480: %zu detection(s) on the first pair, %zu on the second\n",
+              first.detections.size(), r.detections.size());
+  CHECK_EQ(first.detections.size(), size_t{0});
   CHECK_EQ(r.detections.size(), size_t{1});
   if (r.detections.empty()) return;
   const dps::Detection& d = r.detections[0];
   std::vector<double> off;
-  for (const Eigen::Vector2d& q : d.points) off.push_back(dps::DistanceToFootprint(p.truth, q));
-  const double nearest_off = dps::DistanceToFootprint(p.truth, {d.x_m, d.z_m});
-  const double truth_range = dps::NearPoint(p.truth).norm();
+  for (const Eigen::Vector2d& q : d.points) off.push_back(dps::DistanceToFootprint(truth, q));
+  const double nearest_off = dps::DistanceToFootprint(truth, {d.x_m, d.z_m});
+  const double truth_range = dps::NearPoint(truth).norm();
   std::sort(off.begin(), off.end());
   std::printf("  %d points, p90 %.3f m / worst %.3f m off the footprint; nearest point %.3f m off, range %.3f m, "
               "truth %.3f m\n", d.n_points, off[off.size() * 9 / 10], off.back(), nearest_off, d.range_m, truth_range);
@@ -163,6 +192,40 @@ void TestPacingRight() {
   CHECK(off[off.size() * 9 / 10] <= 2 * kSideTolM);
   CHECK(nearest_off <= 2 * kSideTolM);
   CHECK_NEAR(d.range_m, truth_range, kRangeTolFraction * truth_range);
+
+  // The same car 2 m nearer, on a pair whose previous pair saw it 2 m further out: not kept
+  // (Persisting, below); on a detector's first pair: not kept either; on its second: kept.
+  dps::SceneObject moved = car;
+  moved.start.x_m = 4.5;
+  const std::vector<cv::Mat> nearer = RenderFrames(moved, 1, 3, &step, &dt, &truth, &rig);
+  dps::SideDetector again(rig, "right", dps::Side::kRight, dps::DefaultPipelineOptions(rig).side);
+  const size_t on_first = again.Detect(nearer[0], nearer[1], step, dt).detections.size();
+  const dps::SideResult on_second = again.Detect(nearer[1], nearer[2], step, dt, true);
+  std::printf("  2 m nearer: %zu detection(s) on the first pair, %zu on the second\n", on_first,
+              on_second.detections.size());
+  CHECK_EQ(on_first, size_t{0});
+  CHECK_EQ(on_second.detections.size(), size_t{1});
+  if (!on_second.detections.empty()) {
+    const std::vector<Eigen::Vector2d>& now = on_second.detections[0].points;
+    CHECK(dps::Persisting(now, {d.points}, 0.5) == false);
+    CHECK(dps::Persisting(now, {now}, 0.5));
+  }
+  // Without the test every pair keeps it.
+  dps::SideDetectorOptions no_test = dps::DefaultPipelineOptions(rig).side;
+  no_test.pacing_persistence_m = 0.0;
+  dps::SideDetector untested(rig, "right", dps::Side::kRight, no_test);
+  CHECK_EQ(untested.Detect(images[0], images[1], step, dt).detections.size(), size_t{1});
+}
+
+// The persistence test on points with known distances: half of them must lie near an earlier
+// component's point.
+void TestPersisting() {
+  const std::vector<std::vector<Eigen::Vector2d>> earlier{{{0.0, 0.0}}, {{1.0, 0.0}}};
+  CHECK(dps::Persisting({{0.1, 0.0}, {1.1, 0.0}, {5.0, 5.0}}, earlier, 0.5));   // 0.1, 0.1, 6.4 m
+  CHECK(!dps::Persisting({{0.1, 0.0}, {5.0, 5.0}, {6.0, 6.0}}, earlier, 0.5));  // 0.1, 6.4, 7.8 m
+  CHECK(!dps::Persisting({{0.0, 0.6}}, earlier, 0.5));
+  CHECK(dps::Persisting({{0.0, 0.6}}, earlier, 0.7));
+  CHECK(!dps::Persisting({{0.0, 0.0}}, {}, 0.5));
 }
 
 // Consecutive frames (`continuing`): the previous view is the last call's current view, taken
@@ -214,6 +277,7 @@ void TestContinuing() {
 }  // namespace
 
 int main() {
+  TestPersisting();
   TestParkedBeside();
   TestOvertakingLeft();
   TestPacingRight();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 
 #include <opencv2/imgproc.hpp>
 
@@ -181,6 +182,7 @@ void SideDetectorOptions::Check() const {
   Require(view_height > 0 && view_height <= 8192, "view_height", view_height, "1..8192 px");
   Require(focal_px > 0 && focal_px <= 100.0 * view_width, "focal_px", focal_px, "> 0 and at most 100 view widths");
   Require(horizon_fraction > 0 && horizon_fraction < 1, "horizon_fraction", horizon_fraction, "0 < h < 1");
+  Require(pacing_persistence_m >= 0, "pacing_persistence_m", pacing_persistence_m, ">= 0 (0 = no test)");
   Require(back_half_angle_deg >= 0 && back_half_angle_deg < 80, "back_half_angle_deg", back_half_angle_deg, "0 <= a < 80");
   Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
   Require(max_depth_m > 0, "max_depth_m", max_depth_m, "> 0");
@@ -254,6 +256,19 @@ std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions
   const auto [first, last] = MatchedColumns(width, stereo);
   if (side == Side::kLeft) return {width - 1 - last, width - 1 - first};
   return {first, last};
+}
+
+bool Persisting(const std::vector<Eigen::Vector2d>& points, const std::vector<std::vector<Eigen::Vector2d>>& earlier,
+              double distance) {
+  std::vector<double> nearest;
+  for (const Eigen::Vector2d& b : points) {
+    double d2 = std::numeric_limits<double>::infinity();
+    for (const std::vector<Eigen::Vector2d>& component : earlier) {
+      for (const Eigen::Vector2d& a : component) d2 = std::min(d2, (a - b).squaredNorm());
+    }
+    nearest.push_back(d2);
+  }
+  return !nearest.empty() && Median(nearest) <= distance * distance;
 }
 
 int SideDetector::ScaleSixteenths(double baseline_m) const {
@@ -363,7 +378,10 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
                                 const PlanarPose& current_in_previous, double interval_s, bool continuing) {
   SideResult r;
   Matched m;
-  if (!MatchPair(previous_omni, current_omni, current_in_previous, continuing, &r, &m)) return r;
+  if (!MatchPair(previous_omni, current_omni, current_in_previous, continuing, &r, &m)) {
+    last_components_.clear();
+    return r;
+  }
   const ViewSpec& spec = m.reference->spec();
   const cv::Mat road = RoadDisparity(m.geometry->inverse_depth, spec.focal_px, r.baseline_m);
   const HistogramOptions& ho = options_.histogram;
@@ -375,20 +393,32 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   const auto [first_valid, last_valid] = ValidColumns(r.disparity);
   const int margin = options_.stereo.block_width;
   const ContactSearch search{*m.reference, r.disparity, r.score, labels, m.geometry->ignore, road, options_};
+  // The last call's components count for the pacing test only when it matched the previous frame.
+  std::vector<std::vector<Eigen::Vector2d>> last_components;
+  if (continuing) last_components.swap(last_components_);
+  last_components_.clear();
   int id = 0;
   for (const HistogramComponent& c : components) {
     std::vector<Contact> contacts = ComponentContacts(search, c);
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
     contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
     std::vector<Eigen::Vector2d> points;
-    std::vector<double> heights;
+    std::vector<double> heights, disparities;
+    std::vector<const Contact*> kept;
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
       if (k.ground.norm() > options_.max_range_m || k.depth > options_.max_depth_m) continue;
       points.push_back(k.ground);
-      r.obstacle.at<std::uint8_t>(k.y, k.x) = 255;
+      disparities.push_back(std::abs(k.disparity));
+      kept.push_back(&k);
     }
     if (points.empty() || Median(heights) < options_.min_obstacle_height_m) continue;
+    last_components_.push_back(points);
+    if (options_.pacing_persistence_m > 0 && Median(disparities) < options_.min_motion_disparity_px &&
+        !Persisting(points, last_components, options_.pacing_persistence_m)) {
+      continue;
+    }
+    for (const Contact* k : kept) r.obstacle.at<std::uint8_t>(k->y, k->x) = 255;
     Detection det = DetectionFromPoints(points, camera_.name);
     // The object's height: three quarters of its columns reach at least this high.
     std::nth_element(heights.begin(), heights.begin() + heights.size() / 4, heights.end(), std::greater<double>());

@@ -83,6 +83,13 @@ struct SideDetectorOptions {
   // object's disparity down over the road by up to half a window, so the contact is taken half a
   // window above the lowest pixel. px, > 0.
   double pacing_road_contrast_px = 5.0;
+  // An object keeping pace with us stays where it is in the vehicle frame from one frame to the
+  // next (it moves by at most min_motion_disparity_px x depth / f, a few centimetres), while a
+  // component that only looks still - a far band the video codec repeated, a verge too fine to
+  // resolve - has its bottom-most pixels, and so its contact, wherever that frame's matching left
+  // them. A component keeping pace is kept only when one of the previous frame's components
+  // (any, kept or not) had a contact point within this distance of one of its own. m; 0 = no test.
+  double pacing_persistence_m = 0.5;
 
   SideDetectorOptions();
   // Throws dps::Error naming the field, its value and the violated constraint (the stereo and
@@ -112,6 +119,10 @@ Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, c
 // The columns [first, last] of a side view `width` pixels wide that motion stereo matches with
 // these stereo options (the left side's view is matched mirrored).
 std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo);
+// Whether ground points lie where earlier ones did: half of them (the median) within `distance_m`
+// of a point of one of the `earlier` components (SideDetectorOptions::pacing_persistence_m).
+bool Persisting(const std::vector<Eigen::Vector2d>& points, const std::vector<std::vector<Eigen::Vector2d>>& earlier,
+                double distance_m);
 // The side view of these options with its size and focal length times `scale`, turned by yaw_rad.
 ViewSpec SideDetectorViewSpec(Side side, const SideDetectorOptions& options, double scale = 1.0, double yaw_rad = 0.0);
 
@@ -173,6 +184,9 @@ class SideDetector {
   std::pair<int, long> last_key_{0, 0};
   bool last_valid_ = false;
   size_t views_reused_ = 0;
+  // The ground points of the last call's components (before the pacing persistence test), for
+  // the next call's test; empty when that call did not match.
+  std::vector<std::vector<Eigen::Vector2d>> last_components_;
 };
 
 }  // namespace dps
