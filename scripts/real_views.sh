@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the pictures of docs/camera_models.md from the real calibrations and their images
-# with dps-rig: perspective views, a check overlay and the cameras' footprints.
+# with dps-rig: perspective views, a check overlay and the cameras' footprints; and the lane
+# finder's boundaries on the surround rig's left and right stills (docs/detection.md).
 #   scripts/real_views.sh [OUT_DIR]     (default docs/images; uses ${DPS_BUILD_DIR:-build}/tools/dps-rig)
 # The shared images whose licence keeps them out of the project (KITTI-360, the GPL fisheye) are
 # drawn only when OUT_DIR is not inside docs/.
@@ -42,6 +43,21 @@ if [ -d "$shared/ocam_surround_pjlab/imgs" ]; then
     quiet "$rig_tool" view "$work/surround.yaml" --camera "${name}_camera" --image "$imgs/$file.png" --yaw-deg "$yaw" \
       --pitch-deg 15 --fov-deg 100 --size 480x360 --out "$out/real_surround_${name}_view.jpg"
   done
+  # The lane finder on the left and right cameras' stills (docs/detection.md): a drive of one frame
+  # with the car standing, dps-process, and its lanes.csv drawn over both images.
+  process_tool="${DPS_BUILD_DIR:-$here/build}/tools/dps-process"
+  mkdir -p "$work/lanes_drive/left" "$work/lanes_drive/right"
+  quiet "$rig_tool" import --format pjlab-ocam "$pj"/intrinsic/*.json "$pj"/extrinsic/*.json --unit-m 0.5 \
+    --bev-height front_camera=6.07826,left_camera=6.25217,back_camera=6.31014,right_camera=6.28116 \
+    --name back,front,left,right --out "$work/lanes_drive/rig.yaml"
+  cp "$imgs/Left.png" "$work/lanes_drive/left/000000.png"
+  cp "$imgs/Right.png" "$work/lanes_drive/right/000000.png"
+  printf 't,speed,yaw_rate\n0,0,0\n1,0,0\n' > "$work/lanes_drive/can.csv"
+  quiet "$process_tool" "$work/lanes_drive" --out "$work/lanes_out" --no-video --quiet
+  quiet "$rig_tool" check "$work/lanes_drive/rig.yaml" --images "left=$imgs/Left.png,right=$imgs/Right.png" \
+    --lanes "$work/lanes_out/lanes_drive/lanes.csv" --range 8 --ext jpg --out "$work/lanes_check"
+  cp "$work/lanes_check/check_left.jpg" "$out/real_lanes_left.jpg"
+  cp "$work/lanes_check/check_right.jpg" "$out/real_lanes_right.jpg"
 fi
 
 # Not for docs/: KITTI-360's left fisheye (CC BY-NC-SA) and the GPL fisheye.

@@ -1,7 +1,8 @@
 // dps-rig as a user runs it: import a real calibration, show it, project and unproject through
 // stdin / stdout (checked against the library), check and view real images; and the views of real
 // fisheye images keep a checkerboard's rows straight (corners found by OpenCV on the view lie on
-// lines), where the raw image bends them.
+// lines), where the raw image bends them; lane boundaries from a lanes.csv drawn where the rig puts
+// them on the road.
 #include <unistd.h>
 
 #include <cmath>
@@ -219,12 +220,64 @@ void TestCheckAndBadInputs() {
   CHECK(err.find("unknown command 'frobnicate'") != std::string::npos);
 }
 
+// `check --lanes`: a boundary 2 m to the right of the car drawn (magenta) where the right camera of
+// PJLab's surround rig sees the road points x = 2 m, and not 1 m beside it; only the frame asked
+// for; a bad lanes.csv and --frame without --lanes refused.
+void TestCheckLanes() {
+  const fs::path pj = kData / "ocam_surround_pjlab";
+  const std::string rig = (kWork / "surround.yaml").string();
+  CHECK_EQ(Run(kTool + " import --format pjlab-ocam " + (pj / "intrinsic").string() + "/*.json " + (pj / "extrinsic").string() +
+               "/*.json --unit-m 0.5 --bev-height 6.2 --name back,front,left,right --out " + rig), 0);
+  const dps::Rig surround = dps::ReadRig(rig);
+  const dps::RigCamera& right = surround.Camera("right");
+  cv::imwrite((kWork / "grey.png").string(), cv::Mat(right.model.height(), right.model.width(), CV_8UC3, cv::Scalar(90, 90, 90)));
+  std::ofstream(kWork / "lanes.csv") << "frame,t,boundary,offset,heading_deg,curvature,type,confidence\n"
+                                        "3,0.2,right,2.0,0,0,solid,1\n"
+                                        "4,0.267,right,-5.0,0,0,solid,1\n";
+  std::string out, err;
+  const std::string check = kTool + " check " + rig + " --images right=" + (kWork / "grey.png").string() + " --range 8 --out " +
+                            (kWork / "lanes_check").string();
+  CHECK_EQ(Run(check + " --lanes " + (kWork / "lanes.csv").string() + " --frame 3", &out, &err), 0);
+  CHECK(err.find("frame 3, 1 boundary") != std::string::npos);
+  const cv::Mat drawn = cv::imread((kWork / "lanes_check" / "check_right.png").string());
+  CHECK(!drawn.empty());
+  int on = 0, off = 0, seen = 0;
+  for (double z = -2.0; z <= 4.0; z += 0.5) {
+    Eigen::Vector2d at, beside;
+    const bool a = right.model.Project(right.vehicle_from_camera.Inverse().Apply(Eigen::Vector3d(2.0, 0, z)), &at);
+    const bool b = right.model.Project(right.vehicle_from_camera.Inverse().Apply(Eigen::Vector3d(3.0, 0, z + 0.25)), &beside);
+    if (!a || !b || !right.model.InImage(at) || !right.model.InImage(beside)) continue;
+    ++seen;
+    const auto magenta = [&](const Eigen::Vector2d& p) {
+      const cv::Vec3b c = drawn.at<cv::Vec3b>(static_cast<int>(std::lround(p.y())), static_cast<int>(std::lround(p.x())));
+      return c[0] > 200 && c[1] < 60 && c[2] > 200;
+    };
+    on += magenta(at);
+    off += magenta(beside);
+  }
+  std::printf("check --lanes: a boundary at x = 2 m magenta at %d of %d road points the right camera sees, 1 m beside it at %d\n",
+              on, seen, off);
+  CHECK(seen >= 8);
+  CHECK_EQ(on, seen);
+  CHECK_EQ(off, 0);
+  // Frame 4's boundary lies 5 m left of the car, out of the right camera's sight: nothing drawn but the check.
+  CHECK_EQ(Run(check + " --lanes " + (kWork / "lanes.csv").string() + " --frame 4", &out, &err), 0);
+  CHECK(err.find("frame 4, 1 boundary") != std::string::npos);
+  std::ofstream(kWork / "bad_lanes.csv") << "frame,t,boundary,offset,heading_deg,curvature,type,confidence\n"
+                                            "3,0.2,middle,2.0,0,0,solid,1\n";
+  CHECK_EQ(Run(check + " --lanes " + (kWork / "bad_lanes.csv").string(), &out, &err), 1);
+  CHECK(err.find("bad_lanes.csv") != std::string::npos);
+  CHECK_EQ(Run(check + " --frame 3", &out, &err), 1);
+  CHECK(err.find("--frame needs --lanes") != std::string::npos);
+}
+
 }  // namespace
 
 int main() {
   fs::create_directories(kWork);
   TestImportShowProject();
   TestCheckAndBadInputs();
+  TestCheckLanes();
   // A mirror camera (its image cropped as its calibration says), the OCamCalib sample (a wide-angle
   // lens) and a ~190 degree fisheye of the same toolbox.
   // The mirror camera's view is less straight (3.2 px over its 401 px board, docs/camera_models.md):

@@ -53,11 +53,12 @@ const char* kUsage = R"(usage: dps-rig COMMAND ...
       viewpoint. valid = 0 where the model has no answer (the other columns are then empty).
 
   dps-rig check rig.yaml --images NAME=IMAGE[,NAME=IMAGE...] --out DIR [--range M] [--grid M] [--crop X,Y]
-               [--ext png|jpg]
+               [--ext png|jpg] [--lanes lanes.csv [--frame N]]
       Draws the valid field's outline (green), the horizon (yellow), a road grid (cyan, every
       --grid metres within --range) and the own car (red) over each camera's image:
       DIR/check_NAME.png (or .jpg). If the grid is not on the road, the calibration or mounting is
-      wrong.
+      wrong. --lanes: also the lane boundaries dps-process found (its lanes.csv) in frame N (default
+      the file's first), magenta and named, within --range along the car.
 
   dps-rig view rig.yaml --camera NAME --image IMAGE --out VIEW.png [--yaw-deg A] [--pitch-deg P]
                [--fov-deg F] [--size WxH] [--crop X,Y]
@@ -220,12 +221,26 @@ int Check(const dps_cli::Args& args, const dps::Rig& rig) {
   const auto images = args.Pairs("images", "IMAGE");
   std::vector<std::string> inputs{args.positional()[1]};
   for (const auto& [camera, image] : images) inputs.push_back(image);
+  if (args.Has("lanes")) inputs.push_back(args.Get("lanes"));
   dps::CheckOutputFolder(dir, inputs);
   std::filesystem::create_directories(dir);
+  std::vector<dps::LaneBoundaryRow> lanes;
+  if (args.Has("lanes")) {
+    const std::vector<dps::LaneBoundaryRow> rows = dps::ReadLaneBoundaries(args.Get("lanes"));
+    const int frame = args.Integer("frame", rows.empty() ? 0 : rows.front().frame);
+    for (const dps::LaneBoundaryRow& b : rows) {
+      if (b.frame == frame) lanes.push_back(b);
+    }
+    std::cerr << args.Get("lanes") << ": frame " << frame << ", " << lanes.size() << " boundar"
+              << (lanes.size() == 1 ? "y" : "ies") << "\n";
+  } else if (args.Has("frame")) {
+    throw dps::Error("check: --frame needs --lanes");
+  }
   for (const auto& [camera, image] : images) {
     const dps::RigCamera& c = rig.Camera(camera);
-    const cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, image, c.model), args.Number("range", 20.0),
-                                            args.Number("grid", 1.0));
+    cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, image, c.model), args.Number("range", 20.0),
+                                      args.Number("grid", 1.0));
+    if (!lanes.empty()) dps::DrawLaneBoundaries(c, lanes, args.Number("range", 20.0), &drawn);
     const std::string out = (std::filesystem::path(dir) / ("check_" + c.name + "." + ext)).string();
     dps::WriteImageAtomically(out, drawn);
     std::cerr << c.name << ": " << out << "\n";
@@ -264,7 +279,7 @@ int main(int argc, char** argv) {
     const dps_cli::Args args(argc, argv,
                              {"format", "out", "name", "vehicle-length", "vehicle-width", "size", "origin", "bev-height",
                               "unit-m", "axis", "height", "range", "camera", "images", "grid", "image", "yaw-deg",
-                              "pitch-deg", "fov-deg", "crop", "ext"},
+                              "pitch-deg", "fov-deg", "crop", "ext", "lanes", "frame"},
                              {});
     if (args.help() || args.positional().empty()) {
       std::cout << kUsage;

@@ -1,6 +1,7 @@
 #include "dps/camera/rig_report.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -180,6 +181,37 @@ cv::Mat DrawRigCheck(const RigCamera& camera, const Vehicle& vehicle, const cv::
   for (int a = 0; a <= 1440; ++a) horizon.emplace_back(std::sin(a * kPi / 720), 0.0, std::cos(a * kPi / 720));
   DrawCurve(out, sight, horizon, cv::Scalar(40, 230, 230), 2 * thick, true);
   return out;
+}
+
+const cv::Scalar kLaneOverlayColour(255, 0, 255);
+
+void DrawLaneBoundaries(const RigCamera& camera, const std::vector<LaneBoundaryRow>& boundaries, double range_m,
+                        cv::Mat* image) {
+  if (!(range_m > 0.0 && range_m <= 1000.0)) throw Error(Str("lanes: range ", range_m, " m: expected 0 < range <= 1000"));
+  if (image->cols != camera.model.width() || image->rows != camera.model.height() || image->type() != CV_8UC3) {
+    throw Error(Str("camera '", camera.name, "': lanes are drawn on a BGR image of the model's size"));
+  }
+  const Sight sight(camera);
+  const int thick = std::max(2, image->cols / 320);
+  for (const LaneBoundaryRow& b : boundaries) {
+    const double slope = std::tan(b.heading_deg * kPi / 180.0);
+    std::vector<Eigen::Vector3d> points;
+    for (double z = -range_m; z <= range_m + 1e-9; z += 0.05) {
+      points.emplace_back(b.offset_m + slope * z + 0.5 * b.curvature * z * z, 0.0, z);
+    }
+    DrawCurve(*image, sight, points, kLaneOverlayColour, thick);
+    // The name beside the seen point nearest to the car.
+    double nearest = std::numeric_limits<double>::infinity();
+    Eigen::Vector2d at;
+    for (const Eigen::Vector3d& p : points) {
+      Eigen::Vector2d px;
+      if (p.norm() < nearest && sight.Sees(p, &px)) nearest = p.norm(), at = px;
+    }
+    if (std::isfinite(nearest)) {
+      cv::putText(*image, b.boundary, cv::Point2d(at.x() + 2 * thick, at.y()), cv::FONT_HERSHEY_SIMPLEX, 0.4 * thick,
+                  kLaneOverlayColour, thick, cv::LINE_AA);
+    }
+  }
 }
 
 }  // namespace dps

@@ -4,10 +4,12 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "dps/camera/rig.h"
+#include "dps/util/lanes_csv.h"
 
 namespace dps {
 
@@ -28,5 +30,13 @@ cv::Mat DrawRigFootprints(const Rig& rig, double range_m = 12.0, double px_per_m
 // (cyan) and the own car's outline on the road (red).
 cv::Mat DrawRigCheck(const RigCamera& camera, const Vehicle& vehicle, const cv::Mat& image,
                      double range_m = 20.0, double grid_m = 1.0);
+
+// Lane boundaries (lanes.csv's rows: x = offset + tan(heading) z + curvature z^2 / 2 on the road,
+// vehicle frame) over one camera's image (BGR, the model's size), within range_m of the vehicle
+// origin along the car, in magenta, each named (left, right, ...) beside its nearest point the
+// camera sees. The colour, BGR.
+extern const cv::Scalar kLaneOverlayColour;
+void DrawLaneBoundaries(const RigCamera& camera, const std::vector<LaneBoundaryRow>& boundaries, double range_m,
+                        cv::Mat* image);
 
 }  // namespace dps
