@@ -207,7 +207,7 @@ void TestPacingRight() {
   CHECK_EQ(on_second.detections.size(), size_t{1});
   if (!on_second.detections.empty()) {
     const std::vector<Eigen::Vector2d>& now = on_second.detections[0].points;
-    CHECK(dps::Persisting(now, {d.points}, 0.5) == false);
+    CHECK(!dps::Persisting(now, {d.points}, 0.5));
     CHECK(dps::Persisting(now, {now}, 0.5));
   }
   // Without the test every pair keeps it.

@@ -87,8 +87,9 @@ struct SideDetectorOptions {
   // next (it moves by at most min_motion_disparity_px x depth / f, a few centimetres), while a
   // component that only looks still - a far band the video codec repeated, a verge too fine to
   // resolve - has its bottom-most pixels, and so its contact, wherever that frame's matching left
-  // them. A component keeping pace is kept only when one of the previous frame's components
-  // (any, kept or not) had a contact point within this distance of one of its own. m; 0 = no test.
+  // them. A component keeping pace is kept only when half its contact points lie within this
+  // distance of a contact point of one of the previous frame's components (any, kept or not;
+  // Persisting). m; 0 = no test.
   double pacing_persistence_m = 0.5;
 
   SideDetectorOptions();
