@@ -16,6 +16,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = 180.0 / kPi;
 
+const cv::Scalar kLaneOverlayColour(255, 0, 255);  // magenta (BGR)
 const cv::Scalar kCameraColours[] = {{60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}, {150, 150, 150}};
 
 // What deciding whether a camera sees a point needs, computed once per camera.
@@ -182,8 +183,6 @@ cv::Mat DrawRigCheck(const RigCamera& camera, const Vehicle& vehicle, const cv::
   DrawCurve(out, sight, horizon, cv::Scalar(40, 230, 230), 2 * thick, true);
   return out;
 }
-
-const cv::Scalar kLaneOverlayColour(255, 0, 255);
 
 void DrawLaneBoundaries(const RigCamera& camera, const std::vector<LaneBoundaryRow>& boundaries, double range_m,
                         cv::Mat* image) {

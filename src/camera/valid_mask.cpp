@@ -12,6 +12,7 @@
 
 #include "dps/camera/box.h"
 #include "dps/util/error.h"
+#include "dps/util/image.h"
 
 namespace dps {
 
@@ -72,10 +73,8 @@ cv::Mat Grey(const cv::Mat& frame, const CameraModel& model, const char* what) {
     throw Error(Str(what, ": a frame is ", frame.cols, "x", frame.rows, ", the camera's images ", model.width(), "x",
                     model.height()));
   }
-  cv::Mat grey = frame;
-  if (frame.channels() == 3) cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
-  if (grey.type() != CV_8U) throw Error(Str(what, ": frames must be 8-bit grey or BGR images"));
-  return grey;
+  if (frame.type() != CV_8UC1 && frame.type() != CV_8UC3) throw Error(Str(what, ": frames must be 8-bit grey or BGR images"));
+  return GreyImage(frame);
 }
 
 // The brightest grey value each pixel reaches over the frames.

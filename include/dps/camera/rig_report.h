@@ -34,8 +34,7 @@ cv::Mat DrawRigCheck(const RigCamera& camera, const Vehicle& vehicle, const cv::
 // Lane boundaries (lanes.csv's rows: x = offset + tan(heading) z + curvature z^2 / 2 on the road,
 // vehicle frame) over one camera's image (BGR, the model's size), within range_m of the vehicle
 // origin along the car, in magenta, each named (left, right, ...) beside its nearest point the
-// camera sees. The colour, BGR.
-extern const cv::Scalar kLaneOverlayColour;
+// camera sees.
 void DrawLaneBoundaries(const RigCamera& camera, const std::vector<LaneBoundaryRow>& boundaries, double range_m,
                         cv::Mat* image);
 
