@@ -20,6 +20,10 @@ each camera was taken to see the world with: from the drive's masks/, rig.yaml's
 estimated from the drive's first seconds) with masks/<camera>_own_car.png (the own car it was
 taken to see, from the drive's masks/ or estimated when the car moves in those seconds; no
 obstacle is taken from it). Correct one and put it into the drive's masks/.
+Each camera's rotation in rig.yaml is corrected from the road's motion over the drive's first
+second when the estimate is sure enough (within 0.05 deg): summary.json's "extrinsic_correction"
+gives the estimate (pitch, yaw, roll in degrees, about the vehicle's X, Y, Z axes), whether it was
+applied and, if not, why.
 Outputs appear only when complete; drives already complete are skipped (--force redoes them).
 One bad drive is reported and the others still run; the exit status is the number that failed.
 
@@ -44,6 +48,9 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --no-mask-estimate    cameras without a mask: the model's field alone, and no own car (no estimate
                         from the images)
   --mask-seconds S      estimate masks from the first S seconds (default 2)
+  --no-extrinsic-correction
+                        process with rig.yaml's rotations as they are (the estimate is not made)
+  --extrinsic-seconds S estimate the rotations from the first S seconds (default 1)
   --image-fps F         frame rate of image folders without frames.csv (default 30)
   --speed-column NAME   CAN column with the speed (default speed)
   --speed-scale S       to m/s, e.g. 0.2777778 for km/h (default 1)
@@ -94,8 +101,9 @@ int main(int argc, char** argv) {
   return dps_cli::Run("dps-process", [&] {
     const dps_cli::Args args(argc, argv,
                              {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
-                              "yaw-scale", "time-column", "yaw-file", "mask-seconds", "grid-every"},
-                             {"force", "map-png", "no-video", "truncate", "allow-gaps", "quiet", "diagnostics", "no-mask-estimate"});
+                              "yaw-scale", "time-column", "yaw-file", "mask-seconds", "grid-every", "extrinsic-seconds"},
+                             {"force", "map-png", "no-video", "truncate", "allow-gaps", "quiet", "diagnostics", "no-mask-estimate",
+                              "no-extrinsic-correction"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -123,6 +131,9 @@ int main(int argc, char** argv) {
     options.estimate_masks = !args.Has("no-mask-estimate");
     options.mask_estimate_s = args.Number("mask-seconds", 2.0);
     if (!(options.mask_estimate_s > 0)) throw dps::Error("option --mask-seconds: expected > 0");
+    options.correct_extrinsics = !args.Has("no-extrinsic-correction");
+    options.extrinsic_estimate_s = args.Number("extrinsic-seconds", 1.0);
+    if (!(options.extrinsic_estimate_s > 0)) throw dps::Error("option --extrinsic-seconds: expected > 0");
     options.image_fps = args.Number("image-fps", 30.0);
     if (!(options.image_fps > 0)) throw dps::Error("option --image-fps: expected > 0");
     options.can.time_column = args.Get("time-column", "t");

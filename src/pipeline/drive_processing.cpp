@@ -57,6 +57,20 @@ std::string DriveSummary::ToJson() const {
     first_mask = false;
   }
   o << "}";
+  if (!extrinsics.empty()) {
+    o << ",\n  \"extrinsic_correction\": {";
+    bool first_camera = true;
+    for (const auto& [camera, e] : extrinsics) {
+      o << (first_camera ? "" : ", ") << JsonString(camera) << ": {\"applied\": " << (e.applied ? "true" : "false")
+        << ", \"pitch_deg\": " << e.rotation_deg.x() << ", \"yaw_deg\": " << e.rotation_deg.y()
+        << ", \"roll_deg\": " << e.rotation_deg.z() << ", \"sigma_deg\": [" << e.sigma_deg.x() << ", "
+        << e.sigma_deg.y() << ", " << e.sigma_deg.z() << "], \"tracks\": " << e.tracks << ", \"frame_pairs\": " << e.pairs
+        << ", \"rms_px\": " << e.rms_px << ", \"rms_before_px\": " << e.rms_before_px
+        << ", \"reason\": " << JsonString(e.reason) << "}";
+      first_camera = false;
+    }
+    o << "}";
+  }
   if (grid_every > 0) {
     o << ",\n  \"grid\": {\"files\": \"grid/NNNNNN.png, grid/grid.csv\", \"every\": " << grid_every
       << ", \"cell_m\": " << grid_cell_m << ", \"cells\": " << grid_cells << ", \"evidence_per_step\": "
@@ -189,11 +203,35 @@ std::vector<cv::Mat> FirstFrames(const std::string& drive_dir, const RigCamera& 
   return frames;
 }
 
+// How many of the drive's first `available` frames lie within `seconds` of the first (at least one).
+size_t FramesWithin(const DriveInput& in, size_t available, double seconds) {
+  size_t n = std::min<size_t>(available, 1);
+  while (n < available && in.times[n] - in.times[0] <= seconds) ++n;
+  return n;
+}
+
+// The correction of a camera's rotation from `frames`, the drive's first (EstimateExtrinsicCorrection),
+// over those of them within o.extrinsic_estimate_s of the first whose motion the CAN log gives.
+ExtrinsicCorrection EstimateCorrection(const std::vector<cv::Mat>& frames, const RigCamera& camera, const DriveInput& in,
+                                       const DriveOptions& o) {
+  std::vector<cv::Mat> used;
+  std::vector<PlanarPose> poses;
+  for (size_t k = 0; k < FramesWithin(in, frames.size(), o.extrinsic_estimate_s); ++k) {
+    PlanarPose pose;
+    std::string why;
+    if (k > 0 && !MotionBetween(in.can, in.times[0], in.times[k], &pose, &why)) break;
+    used.push_back(frames[k]);
+    poses.push_back(pose);
+  }
+  return EstimateExtrinsicCorrection(used, poses, camera, in.rig.vehicle, o.extrinsic);
+}
+
 // Each camera's mask (DESIGN.md §3.2): the drive's masks/<camera>.png, else rig.yaml's, else
-// estimated from the drive's first seconds; and its own car: the drive's
-// masks/<camera>_own_car.png, else estimated from the same frames when the car moved over them.
+// estimated from the drive's first seconds; its own car: the drive's masks/<camera>_own_car.png,
+// else estimated from the same frames when the car moved over them; and, with
+// o.correct_extrinsics, its rotation corrected from the road's motion in those frames.
 // Returns, by camera name, its valid pixels (CameraValidMask) and its own car (empty: none).
-std::map<std::string, std::pair<cv::Mat, cv::Mat>> AttachMasks(const std::string& drive_dir, const DriveOptions& o,
+std::map<std::string, std::pair<cv::Mat, cv::Mat>> PrepareCameras(const std::string& drive_dir, const DriveOptions& o,
                                                                DriveInput* in, DriveSummary* s) {
   std::map<std::string, std::pair<cv::Mat, cv::Mat>> masks;
   for (RigCamera& camera : in->rig.cameras) {
@@ -203,15 +241,22 @@ std::map<std::string, std::pair<cv::Mat, cv::Mat>> AttachMasks(const std::string
     MaskSummary& m = s->masks[camera.name];
     const bool estimate = o.estimate_masks && in->frames > 0;
     const bool field_given = fs::exists(file) || !camera.mask.empty(), own_given = fs::exists(own_file);
-    std::vector<cv::Mat> frames;  // read only when something is estimated from them
-    if (estimate && !(field_given && own_given)) frames = FirstFrames(drive_dir, camera, *in, o.mask_estimate_s);
+    // Read only when something is estimated from them.
+    const bool masks_estimated = estimate && !(field_given && own_given);
+    const bool correct = o.correct_extrinsics && in->frames > 1;
+    std::vector<cv::Mat> frames;
+    if (masks_estimated || correct) {
+      frames = FirstFrames(drive_dir, camera, *in,
+                           std::max(masks_estimated ? o.mask_estimate_s : 0.0, correct ? o.extrinsic_estimate_s : 0.0));
+    }
+    const std::vector<cv::Mat> mask_frames(frames.begin(), frames.begin() + FramesWithin(*in, frames.size(), o.mask_estimate_s));
     if (fs::exists(file)) {
       camera.mask = ReadCameraMask(file.string(), camera.model);
       m.source = "drive";
     } else if (!camera.mask.empty()) {
       m.source = "rig.yaml";
     } else if (estimate) {
-      camera.mask = EstimateFieldMask(frames, camera.model, o.field_mask);
+      camera.mask = EstimateFieldMask(mask_frames, camera.model, o.field_mask);
       m.source = "estimated";
     } else {
       m.source = "model";
@@ -223,14 +268,18 @@ std::map<std::string, std::pair<cv::Mat, cv::Mat>> AttachMasks(const std::string
       // From how far the car travelled over those frames (none known: no estimate).
       PlanarPose moved;
       std::string why;
-      if (MotionBetween(in->can, in->times[0], in->times[frames.size() - 1], &moved, &why)) {
-        camera.own_car = EstimateOwnCarMask(frames, camera, in->rig.vehicle, std::hypot(moved.x_m, moved.z_m),
+      if (MotionBetween(in->can, in->times[0], in->times[mask_frames.size() - 1], &moved, &why)) {
+        camera.own_car = EstimateOwnCarMask(mask_frames, camera, in->rig.vehicle, std::hypot(moved.x_m, moved.z_m),
                                             o.own_car_mask);
       }
       if (!camera.own_car.empty()) m.own_car_source = "estimated";
     }
     if (!camera.own_car.empty()) {
       m.own_car_fraction = static_cast<double>(cv::countNonZero(camera.own_car)) / static_cast<double>(camera.own_car.total());
+    }
+    if (correct) {
+      const ExtrinsicCorrection& e = s->extrinsics[camera.name] = EstimateCorrection(frames, camera, *in, o);
+      if (e.applied) camera = CorrectedCamera(camera, e);
     }
     const cv::Mat valid = CameraValidMask(camera);
     m.valid_fraction = static_cast<double>(cv::countNonZero(valid)) / static_cast<double>(valid.total());
@@ -344,6 +393,21 @@ class PictureOutputs {
   bool png_ = false;
 };
 
+// The pipeline's options for a drive. When both front cameras' rotations were corrected from the
+// road (the three angles of each), the front pair's drift correction - the rows' offset alone,
+// measured on a few corners that may lie on the own car - has nothing left to correct and only
+// adds its noise: it is off.
+PipelineOptions DrivePipelineOptions(const DriveOptions& o, const Rig& rig, const DriveSummary& s) {
+  PipelineOptions p = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
+  bool corrected = true;
+  for (const char* camera : {"left", "right"}) {
+    const auto it = s.extrinsics.find(camera);
+    corrected = corrected && it != s.extrinsics.end() && it->second.applied;
+  }
+  if (corrected) p.front.drift_interval = 0;
+  return p;
+}
+
 // One drive's run: the pipeline over its frames, then tracking, the grid, the map and the files.
 class DriveRun {
  public:
@@ -353,7 +417,7 @@ class DriveRun {
         in_(in),
         tmp_(tmp),
         s_(*s),
-        pipeline_options_(o.default_pipeline ? DefaultPipelineOptions(in.rig) : o.pipeline),
+        pipeline_options_(DrivePipelineOptions(o, in.rig, *s)),
         pipeline_(in.rig, pipeline_options_),
         tracker_(o.tracker),
         grid_(o.occupancy),
@@ -544,6 +608,8 @@ void DriveOptions::Check() const {
   const OptionCheck Require("drive");
   Require(image_fps > 0 && image_fps <= 10000, "image_fps", image_fps, "0 < fps <= 10000");
   Require(mask_estimate_s > 0, "mask_estimate_s", mask_estimate_s, "> 0");
+  Require(extrinsic_estimate_s > 0, "extrinsic_estimate_s", extrinsic_estimate_s, "> 0");
+  extrinsic.Check();
   Require(grid_every >= 0, "grid_every", grid_every, ">= 0");
   Require(max_frame_gap > 1 && max_frame_gap <= 1000, "max_frame_gap", max_frame_gap, "1 < gap <= 1000 intervals");
   Require(can.max_gap_s > 0, "can.max_gap_s", can.max_gap_s, "> 0");
@@ -567,7 +633,9 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
   CheckOutputFolder(s.output_dir, {drive_dir});
   CheckReplaceable(s.output_dir, "summary.json");
   DriveInput in = OpenDrive(drive_dir, o, &s);
-  const std::map<std::string, std::pair<cv::Mat, cv::Mat>> masks = AttachMasks(drive_dir, o, &in, &s);
+  const auto cameras_start = Clock::now();
+  const std::map<std::string, std::pair<cv::Mat, cv::Mat>> masks = PrepareCameras(drive_dir, o, &in, &s);
+  const double cameras_s = Seconds(cameras_start, Clock::now());
   // Outputs under a temporary name.
   fs::create_directories(out_root);
   const fs::path tmp = TemporaryFolderFor(s.output_dir);  // (and killed runs' ones removed)
@@ -578,6 +646,7 @@ DriveSummary ProcessDrive(const std::string& drive_dir, const std::string& out_r
     DriveRun run(drive_dir, o, in, tmp, &s);
     run.Run(progress);
     run.WriteFiles();
+    s.stage_seconds["cameras"] = cameras_s;
     s.seconds = Seconds(start, Clock::now());
     s.frames_per_second = s.seconds > 0 ? in.frames / s.seconds : 0;
     WriteFileAtomically((tmp / "summary.json").string(), s.ToJson());  // last: marks completion

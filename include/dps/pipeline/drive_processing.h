@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "dps/calib/extrinsic_correction.h"
 #include "dps/camera/valid_mask.h"
 #include "dps/map/occupancy_grid.h"
 #include "dps/map/surround_map.h"
@@ -44,6 +45,12 @@ struct DriveOptions {
   // ... and, for cameras without masks/<camera>_own_car.png in the drive, the own car from the
   // same frames (EstimateOwnCarMask), when the car moved over them.
   OwnCarMaskOptions own_car_mask;
+  // Each camera's rotation in the rig corrected from the road's motion over the drive's first
+  // extrinsic_estimate_s seconds (EstimateExtrinsicCorrection), when the estimate is sure enough;
+  // the estimate is reported in summary.json either way.
+  bool correct_extrinsics = true;
+  double extrinsic_estimate_s = 1.0;  // > 0
+  ExtrinsicCorrectionOptions extrinsic;
 
   // Throws dps::Error naming the field, its value and the violated constraint (the nested options
   // included; `pipeline` only when it is used).
@@ -70,12 +77,14 @@ struct DriveSummary {
   double front_vertical_offset_px = 0.0;  // drift correction of the front pair at the end
   std::string map_video;          // the map video's file name and codec ("map.mp4 (H.264)"); "" = none
   std::map<std::string, MaskSummary> masks;  // by camera; the masks used are written to masks/
+  std::map<std::string, ExtrinsicCorrection> extrinsics;  // by camera, when estimated
   // The grid files' geometry when they are written (grid_every > 0): cell size, cells per side,
   // evidence per 16-bit step, the stride.
   double grid_cell_m = 0.0, grid_scale = 0.0;
   int grid_cells = 0, grid_every = 0;
   std::vector<std::string> warnings;
-  std::map<std::string, double> stage_seconds;  // decode, front, sides, map, write
+  // cameras (masks and extrinsic correction from the first seconds), decode, front, sides, map, write
+  std::map<std::string, double> stage_seconds;
   double seconds = 0.0;
   double frames_per_second = 0.0;
   std::string ToJson() const;
