@@ -13,9 +13,9 @@
 #   SIZES="320x240"     the image sizes (default "640x480 320x240")
 #   FAMILIES="lead_car" the scenes (default every shipped drive scene)
 #   DOC=path            where the table goes (default docs/robustness.md; "-" = stdout)
-#   CALIBRATE_SIZES="320x240"  sizes whose drives are also processed with the rig dps-calibrate
-#                       estimates from marks of a calibration scene rendered with the drive's own
-#                       rig (default 320x240; "" = none)
+#   CALIBRATE_SIZES="320x240"  sizes whose drives are also processed with their rendering rig
+#                       and with the rig dps-calibrate estimates from marks of a calibration scene
+#                       rendered with the drive's own rig (default both sizes; "" = none)
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD_DIR=${DPS_BUILD_DIR:-$ROOT/build}
@@ -24,7 +24,7 @@ SEEDS=${SEEDS:-"1000 1001 1002 1003 1004 1005 1006 1007"}
 SIZES=${SIZES:-"640x480 320x240"}
 FAMILIES=${FAMILIES:-"lead_car overtaking overtaking_right following cut_in stop_and_go parked_cars parked_left left_turn truck_far empty_road empty_turn"}
 DOC=${DOC:-$ROOT/docs/robustness.md}
-CALIBRATE_SIZES=${CALIBRATE_SIZES-320x240}
+CALIBRATE_SIZES=${CALIBRATE_SIZES-"640x480 320x240"}
 "$ROOT/scripts/build.sh" >/dev/null
 T="$BUILD_DIR/tools"
 mkdir -p "$WORK"

@@ -19,6 +19,7 @@ namespace {
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 constexpr int kWindow = 21;  // Lucas-Kanade's window, px
 constexpr double kStartScalePx = 4.0;  // the robust weights' first scale
+constexpr int kWarpStep = 4;  // px between the rays computed exactly (RoadRegion, RoadWarp)
 
 Eigen::Matrix3d RotationFromVector(const Eigen::Vector3d& w) {
   const double angle = w.norm();
@@ -29,29 +30,44 @@ Eigen::Matrix3d RotationFromVector(const Eigen::Vector3d& w) {
 // outside the vehicle's footprint and margin, and every pixel of the tracking window around it sees
 // the road (the camera's valid pixels, not the own car; no ray through the vehicle's body below
 // the camera's level): a window that holds the own car's or the field's edge tracks that edge.
-cv::Mat RoadRegion(const RigCamera& camera, const Vehicle& vehicle, const ExtrinsicCorrectionOptions& o) {
-  const cv::Mat valid = CameraValidMask(camera);
-  cv::Mat road(valid.size(), CV_8U, cv::Scalar(0)), region(valid.size(), CV_8U, cv::Scalar(0));
+//
+// The rays are classified every kWarpStep pixels (the classes' edges are smooth curves in the
+// image); the valid pixels and the own car at every pixel.
+cv::Mat RoadRegion(const RigCamera& camera, const cv::Mat& valid, const Vehicle& vehicle, const ExtrinsicCorrectionOptions& o) {
+  const cv::Size coarse_size(valid.cols / kWarpStep + 2, valid.rows / kWarpStep + 2);
+  cv::Mat road(coarse_size, CV_8U, cv::Scalar(0)), region(coarse_size, CV_8U, cv::Scalar(0));
   const Eigen::Vector3d& t = camera.vehicle_from_camera.t;
   const double half_width = vehicle.width_m / 2 + o.vehicle_margin_m, half_length = vehicle.length_m / 2 + o.vehicle_margin_m;
   // The body up to the camera's level (the camera itself outside it, in its mirror).
   const Eigen::Vector3d lo(-vehicle.width_m / 2, std::min(t.y(), 0.0), -vehicle.length_m / 2);
   const Eigen::Vector3d hi(vehicle.width_m / 2, 0.0, vehicle.length_m / 2);
-  for (int v = 0; v < region.rows; ++v) {
-    for (int u = 0; u < region.cols; ++u) {
-      if (!valid.at<std::uint8_t>(v, u) || (!camera.own_car.empty() && camera.own_car.at<std::uint8_t>(v, u))) continue;
+  for (int r = 0; r < coarse_size.height; ++r) {
+    for (int c = 0; c < coarse_size.width; ++c) {
       Eigen::Vector3d ray, ground;
-      if (!camera.model.Unproject({u, v}, &ray) || !RayMeetsRoad(t, camera.vehicle_from_camera.Rotate(ray), &ground)) continue;
-      if (RayMeetsBox(t, ground - t, lo, hi, 0.1 / (ground - t).norm(), 1.0)) continue;
-      road.at<std::uint8_t>(v, u) = 255;
+      if (!camera.model.Unproject({c * kWarpStep, r * kWarpStep}, &ray) ||
+          !RayMeetsRoad(t, camera.vehicle_from_camera.Rotate(ray), &ground) ||
+          RayMeetsBox(t, ground - t, lo, hi, 0.1 / (ground - t).norm(), 1.0)) {
+        continue;
+      }
+      road.at<std::uint8_t>(r, c) = 255;
       const double distance = std::hypot(ground.x() - t.x(), ground.z() - t.z());
       if (distance < o.min_distance_m || distance > o.max_distance_m) continue;
       if (std::abs(ground.x()) <= half_width && std::abs(ground.z()) <= half_length) continue;
-      region.at<std::uint8_t>(v, u) = 255;
+      region.at<std::uint8_t>(r, c) = 255;
     }
   }
-  cv::erode(road, road, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(kWindow + 2, kWindow + 2)));
-  return region & road;
+  // Back to pixels (each coarse sample stands for the pixels up to half a step around it).
+  const auto full = [&](const cv::Mat& coarse) {
+    cv::Mat big;
+    cv::resize(coarse, big, cv::Size(coarse.cols * kWarpStep, coarse.rows * kWarpStep), 0, 0, cv::INTER_NEAREST);
+    const int shift = kWarpStep / 2;
+    return cv::Mat(big(cv::Rect(shift, shift, valid.cols, valid.rows)).clone());
+  };
+  cv::Mat sees = full(road) & valid;
+  if (!camera.own_car.empty()) sees &= ~camera.own_car;
+  // The window's margin, and the coarse edges' half step.
+  cv::erode(sees, sees, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(kWindow + 2 + kWarpStep, kWindow + 2 + kWarpStep)));
+  return full(region) & sees;
 }
 
 // Where the road seen at `pixel` of one frame appears in another, `other_from_this` apart (the
@@ -63,31 +79,38 @@ bool RoadPixel(const RigCamera& camera, const Pose& other_from_this, const Eigen
          camera.model.Project(c.R.transpose() * (other_from_this.Apply(ground) - c.t), other);
 }
 
-// A remap of another frame onto this one through the road plane (CV_32FC2, (-1, -1) where there is
-// none), computed every kWarpStep pixels and interpolated between: the warp is smooth.
-cv::Mat RoadWarp(const RigCamera& camera, const Pose& other_from_this) {
-  constexpr int kWarpStep = 4;
-  const int width = camera.model.width(), height = camera.model.height();
-  cv::Mat coarse(height / kWarpStep + 2, width / kWarpStep + 2, CV_32FC2);
+// A remap of another frame onto the pixels `roi` of this one through the road plane (CV_32FC2 of
+// the roi's size, far outside the image where there is none), computed every kWarpStep pixels and
+// interpolated between (the warp is smooth): samples at the pixels that cv::resize's linear
+// interpolation by kWarpStep puts its source samples at.
+cv::Mat RoadWarp(const RigCamera& camera, const Pose& other_from_this, const cv::Rect& roi) {
+  cv::Mat coarse(roi.height / kWarpStep + 2, roi.width / kWarpStep + 2, CV_32FC2);
+  const double offset = (kWarpStep - 1) / 2.0;
   for (int r = 0; r < coarse.rows; ++r) {
     for (int c = 0; c < coarse.cols; ++c) {
       Eigen::Vector2d other;
-      const bool ok = RoadPixel(camera, other_from_this, {c * kWarpStep, r * kWarpStep}, &other);
+      const bool ok = RoadPixel(camera, other_from_this, {roi.x + c * kWarpStep + offset, roi.y + r * kWarpStep + offset}, &other);
       coarse.at<cv::Vec2f>(r, c) = ok ? cv::Vec2f(static_cast<float>(other.x()), static_cast<float>(other.y())) : cv::Vec2f(-1e4f, -1e4f);
     }
   }
-  cv::Mat map(height, width, CV_32FC2);
-  for (int y = 0; y < height; ++y) {
-    const int r = y / kWarpStep;
-    const float fy = static_cast<float>(y % kWarpStep) / kWarpStep;
-    for (int x = 0; x < width; ++x) {
-      const int c = x / kWarpStep;
-      const float fx = static_cast<float>(x % kWarpStep) / kWarpStep;
-      map.at<cv::Vec2f>(y, x) = (1 - fy) * ((1 - fx) * coarse.at<cv::Vec2f>(r, c) + fx * coarse.at<cv::Vec2f>(r, c + 1)) +
-                                fy * ((1 - fx) * coarse.at<cv::Vec2f>(r + 1, c) + fx * coarse.at<cv::Vec2f>(r + 1, c + 1));
-    }
-  }
-  return map;
+  cv::Mat map;
+  cv::resize(coarse, map, cv::Size(coarse.cols * kWarpStep, coarse.rows * kWarpStep), 0, 0, cv::INTER_LINEAR);
+  return map(cv::Rect(0, 0, roi.width, roi.height)).clone();
+}
+
+// The smaller eigenvalue of the image's gradient structure tensor over the tracking window at `p`
+// over the larger (1: texture in every direction, 0: an edge or nothing).
+double Isotropy(const cv::Mat& grey, const cv::Point2f& p) {
+  const int half = kWindow / 2 + 1;
+  const cv::Rect box = cv::Rect(cvRound(p.x) - half, cvRound(p.y) - half, 2 * half + 1, 2 * half + 1) &
+                       cv::Rect(0, 0, grey.cols, grey.rows);
+  cv::Mat gx, gy;
+  cv::Sobel(grey(box), gx, CV_32F, 1, 0);
+  cv::Sobel(grey(box), gy, CV_32F, 0, 1);
+  const cv::Rect inner(1, 1, box.width - 2, box.height - 2);  // the borders' gradients are not the image's
+  const double xx = gx(inner).dot(gx(inner)), yy = gy(inner).dot(gy(inner)), xy = gx(inner).dot(gy(inner));
+  const double mean = (xx + yy) / 2, spread = std::sqrt((xx - yy) * (xx - yy) / 4 + xy * xy);
+  return mean + spread > 0 ? (mean - spread) / (mean + spread) : 0.0;
 }
 
 // One road feature: its ray (camera frame) in frame i and the pixel it was tracked to in frame j.
@@ -131,17 +154,24 @@ namespace {
 
 // One pass: the road tracked through the warp `camera` gives and the rotation fitted (not judged:
 // `applied` and `reason` are left to the caller, except for too few tracks).
+// `region`: where features are taken (RoadRegion), `valid`: the camera's valid pixels.
 ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::vector<PlanarPose>& poses,
-                                 const RigCamera& camera, const Vehicle& vehicle, const ExtrinsicCorrectionOptions& o) {
+                                 const RigCamera& camera, const cv::Mat& region, const cv::Mat& valid,
+                                 const ExtrinsicCorrectionOptions& o) {
   ExtrinsicCorrection c;
   c.camera = camera.name;
-  const cv::Mat region = RoadRegion(camera, vehicle, o);
-  const cv::Mat valid = CameraValidMask(camera);
   const Eigen::Matrix3d& R0 = camera.vehicle_from_camera.R;
   const Eigen::Vector3d& t = camera.vehicle_from_camera.t;
   std::vector<Pose> j_from_i;
   std::vector<Track> tracks;
   const double spacing = std::max(3.0, camera.model.width() / 100.0);
+  // The pixels worked on: the region's bounding box and a window around it.
+  const cv::Rect roi = (cv::boundingRect(region) + cv::Size(2 * kWindow, 2 * kWindow) - cv::Point(kWindow, kWindow)) &
+                       cv::Rect(0, 0, region.cols, region.rows);
+  if (roi.empty()) {
+    c.reason = "no road in view";
+    return c;
+  }
   for (size_t i = 0; i < grey.size(); ++i) {
     // The first later frame the camera moved min_travel_m from (the vehicle's pose; the camera
     // moves as far up to the turn, a few per cent at these intervals).
@@ -153,28 +183,30 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
     // keeps its scale and shape (the tracker's window model holds) and sits within the rig's error
     // of where frame j shows it.
     const Pose j_from_i_pose = (poses[i].ToPose3().Inverse() * poses[j].ToPose3()).Inverse();
-    const cv::Mat map = RoadWarp(camera, j_from_i_pose.Inverse());
+    const cv::Mat map = RoadWarp(camera, j_from_i_pose.Inverse(), roi);
     cv::Mat warped;
     cv::remap(grey[i], warped, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-    std::vector<cv::Point2f> corners, to, back;
-    cv::goodFeaturesToTrack(warped, corners, o.max_features, 1e-3, spacing, region);
+    std::vector<cv::Point2f> corners, to, back;  // in the roi
+    cv::goodFeaturesToTrack(warped, corners, o.max_features, 1e-3, spacing, region(roi));
     // A window's texture must fix both directions: on a marking's edge the tracker slides along it.
-    cv::Mat eigen;
-    cv::cornerEigenValsAndVecs(warped, eigen, kWindow, 3);
     corners.erase(std::remove_if(corners.begin(), corners.end(),
-                                 [&](const cv::Point2f& p) {
-                                   const cv::Vec6f& e = eigen.at<cv::Vec6f>(cvRound(p.y), cvRound(p.x));
-                                   return std::min(e[0], e[1]) < o.min_isotropy * std::max(e[0], e[1]);
-                                 }),
+                                 [&](const cv::Point2f& p) { return Isotropy(warped, p) < o.min_isotropy; }),
                   corners.end());
     if (corners.empty()) continue;
     std::vector<std::uint8_t> status, status_back;
     std::vector<float> error;
     const cv::TermCriteria stop(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 0.01);
-    cv::calcOpticalFlowPyrLK(warped, grey[j], corners, to, status, error, cv::Size(kWindow, kWindow), 1, stop);
+    const cv::Mat later = grey[j](roi);
+    cv::calcOpticalFlowPyrLK(warped, later, corners, to, status, error, cv::Size(kWindow, kWindow), 1, stop);
     back = corners;
-    cv::calcOpticalFlowPyrLK(grey[j], warped, to, back, status_back, error, cv::Size(kWindow, kWindow), 1, stop,
+    cv::calcOpticalFlowPyrLK(later, warped, to, back, status_back, error, cv::Size(kWindow, kWindow), 1, stop,
                              cv::OPTFLOW_USE_INITIAL_FLOW);
+    const cv::Point2f origin(static_cast<float>(roi.x), static_cast<float>(roi.y));
+    for (size_t n = 0; n < corners.size(); ++n) {
+      corners[n] += origin;
+      to[n] += origin;
+      back[n] += origin;
+    }
     const int pair = static_cast<int>(j_from_i.size());
     j_from_i.push_back(j_from_i_pose);
     bool used = false;
@@ -206,25 +238,33 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
   Eigen::Matrix3d JtWJ = Eigen::Matrix3d::Zero();
   double weighted_squares = 0.0, weights = 0.0;
-  constexpr double h = 1e-5;
   auto residual = [&](const Track& k, const Eigen::Vector3d& at, Eigen::Vector2d* r) {
     return Residual(k, camera.model, RotationFromVector(at) * R0, t, j_from_i, r);
   };
+  // Each track's Jacobian at the rig (central differences): over the fraction of a degree the
+  // estimate moves, it does not change enough to matter.
+  std::vector<Eigen::Matrix<double, 2, 3>> jacobians(tracks.size());
+  std::vector<bool> usable(tracks.size(), false);
+  constexpr double h = 1e-5;
+  for (size_t n = 0; n < tracks.size(); ++n) {
+    bool ok = true;
+    for (int a = 0; a < 3 && ok; ++a) {
+      Eigen::Vector2d plus, minus;
+      const Eigen::Vector3d step = Eigen::Vector3d::Unit(a) * h;
+      ok = residual(tracks[n], step, &plus) && residual(tracks[n], -step, &minus);
+      if (ok) jacobians[n].col(a) = (plus - minus) / (2 * h);
+    }
+    usable[n] = ok;
+  }
   for (int iteration = 0; iteration < 30; ++iteration) {
     const double now = std::max(scale, kStartScalePx * std::pow(0.5, iteration));
     JtWJ.setZero();
     Eigen::Vector3d JtWr = Eigen::Vector3d::Zero();
     weighted_squares = weights = 0.0;
-    for (const Track& k : tracks) {
-      Eigen::Vector2d r, plus = Eigen::Vector2d::Zero(), minus = Eigen::Vector2d::Zero();
-      Eigen::Matrix<double, 2, 3> J;
-      bool ok = residual(k, w, &r);
-      for (int a = 0; a < 3 && ok; ++a) {
-        const Eigen::Vector3d step = Eigen::Vector3d::Unit(a) * h;
-        ok = residual(k, w + step, &plus) && residual(k, w - step, &minus);
-        J.col(a) = (plus - minus) / (2 * h);
-      }
-      if (!ok) continue;
+    for (size_t n = 0; n < tracks.size(); ++n) {
+      Eigen::Vector2d r;
+      if (!usable[n] || !residual(tracks[n], w, &r)) continue;
+      const Eigen::Matrix<double, 2, 3>& J = jacobians[n];
       const double weight = 1.0 / (1.0 + r.squaredNorm() / (now * now));
       JtWJ += weight * J.transpose() * J;
       JtWr += weight * J.transpose() * r;
@@ -271,13 +311,17 @@ ExtrinsicCorrection EstimateExtrinsicCorrection(const std::vector<cv::Mat>& fram
   }
   std::vector<cv::Mat> grey;
   for (const cv::Mat& f : frames) grey.push_back(GreyImage(f));
-  ExtrinsicCorrection c = EstimateOnce(grey, poses, camera, vehicle, o);
+  // The region from the rig as given: a correction of a fraction of a degree moves its edges by a
+  // pixel or two, well inside the tracking window's margin.
+  const cv::Mat valid = CameraValidMask(camera);
+  const cv::Mat region = RoadRegion(camera, valid, vehicle, o);
+  ExtrinsicCorrection c = EstimateOnce(grey, poses, camera, region, valid, o);
   if (!c.reason.empty()) return c;
   // The tracking warps through the rig as it is, and its error distorts the warped texture a
   // little: a second pass from the first's correction tracks through nearly the right road
   // plane, so that what is left does not depend on how far off the rig started.
   if (c.rotation_deg.allFinite() && c.rotation_deg.norm() <= o.max_correction_deg) {
-    const ExtrinsicCorrection second = EstimateOnce(grey, poses, CorrectedCamera(camera, c), vehicle, o);
+    const ExtrinsicCorrection second = EstimateOnce(grey, poses, CorrectedCamera(camera, c), region, valid, o);
     if (second.reason.empty()) {
       const Eigen::AngleAxisd total(RotationFromVector(second.rotation_deg * kDeg) * RotationFromVector(c.rotation_deg * kDeg));
       const double before = c.rms_before_px;
