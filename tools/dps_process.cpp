@@ -21,9 +21,9 @@ estimated from the drive's first seconds) with masks/<camera>_own_car.png (the o
 taken to see, from the drive's masks/ or estimated when the car moves in those seconds; no
 obstacle is taken from it). Correct one and put it into the drive's masks/.
 Each camera's rotation in rig.yaml is corrected from the road's motion over the drive's first
-second when the estimate is sure enough (within 0.05 deg): summary.json's "extrinsic_correction"
-gives the estimate (pitch, yaw, roll in degrees, about the vehicle's X, Y, Z axes), whether it was
-applied and, if not, why.
+second when the estimate is sure enough (standard error within 0.05 deg): summary.json's
+"extrinsic_correction" gives the estimate (pitch, yaw, roll in degrees, about the vehicle's X, Y,
+Z axes), whether it was applied and, if not, why.
 Outputs appear only when complete; drives already complete are skipped (--force redoes them).
 One bad drive is reported and the others still run; the exit status is the number that failed.
 

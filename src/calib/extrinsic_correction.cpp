@@ -147,7 +147,8 @@ void ExtrinsicCorrectionOptions::Check() const {
   Require(min_isotropy > 0 && min_isotropy <= 1, "min_isotropy", min_isotropy, "0 < r <= 1");
   Require(min_tracks >= 10, "min_tracks", min_tracks, ">= 10");
   Require(max_sigma_deg > 0, "max_sigma_deg", max_sigma_deg, "> 0");
-  Require(max_correction_deg > 0, "max_correction_deg", max_correction_deg, "> 0");
+  Require(min_correction_deg >= 0, "min_correction_deg", min_correction_deg, ">= 0");
+  Require(max_correction_deg > min_correction_deg, "max_correction_deg", max_correction_deg, "> min_correction_deg");
 }
 
 namespace {
@@ -336,8 +337,12 @@ ExtrinsicCorrection EstimateExtrinsicCorrection(const std::vector<cv::Mat>& fram
     c.reason = Str("standard error ", c.sigma_deg.maxCoeff(), " deg (more than ", o.max_sigma_deg, ")");
   } else if (c.rotation_deg.norm() > o.max_correction_deg) {
     c.reason = Str("correction ", c.rotation_deg.norm(), " deg (more than ", o.max_correction_deg, ")");
+  } else if (c.rotation_deg.norm() < o.min_correction_deg) {
+    c.reason = Str("correction ", c.rotation_deg.norm(), " deg, within the method's resolution (", o.min_correction_deg,
+                   "): the rig is right");
+    c.verified = true;
   } else {
-    c.applied = true;
+    c.applied = c.verified = true;
   }
   return c;
 }

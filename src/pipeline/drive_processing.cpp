@@ -62,6 +62,7 @@ std::string DriveSummary::ToJson() const {
     bool first_camera = true;
     for (const auto& [camera, e] : extrinsics) {
       o << (first_camera ? "" : ", ") << JsonString(camera) << ": {\"applied\": " << (e.applied ? "true" : "false")
+        << ", \"verified\": " << (e.verified ? "true" : "false")
         << ", \"pitch_deg\": " << e.rotation_deg.x() << ", \"yaw_deg\": " << e.rotation_deg.y()
         << ", \"roll_deg\": " << e.rotation_deg.z() << ", \"sigma_deg\": [" << e.sigma_deg.x() << ", "
         << e.sigma_deg.y() << ", " << e.sigma_deg.z() << "], \"tracks\": " << e.tracks << ", \"frame_pairs\": " << e.pairs
@@ -393,16 +394,16 @@ class PictureOutputs {
   bool png_ = false;
 };
 
-// The pipeline's options for a drive. When both front cameras' rotations were corrected from the
-// road (the three angles of each), the front pair's drift correction - the rows' offset alone,
-// measured on a few corners that may lie on the own car - has nothing left to correct and only
-// adds its noise: it is off.
+// The pipeline's options for a drive. When both front cameras' rotations were verified from the
+// road (the three angles of each; corrected or found right), the front pair's drift correction -
+// the rows' offset alone, measured on a few corners that may lie on the own car - has nothing left
+// to correct and only adds its noise: it is off.
 PipelineOptions DrivePipelineOptions(const DriveOptions& o, const Rig& rig, const DriveSummary& s) {
   PipelineOptions p = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
   bool corrected = true;
   for (const char* camera : {"left", "right"}) {
     const auto it = s.extrinsics.find(camera);
-    corrected = corrected && it != s.extrinsics.end() && it->second.applied;
+    corrected = corrected && it != s.extrinsics.end() && it->second.verified;
   }
   if (corrected) p.front.drift_interval = 0;
   return p;
