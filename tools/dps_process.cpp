@@ -23,7 +23,7 @@ obstacle is taken from it). Correct one and put it into the drive's masks/.
 Each camera's rotation in rig.yaml is corrected from the road's motion over the drive's first
 second when the estimate is sure enough (standard error within 0.05 deg): summary.json's
 "extrinsic_correction" gives the estimate (pitch, yaw, roll in degrees, about the vehicle's X, Y,
-Z axes), whether it was applied and, if not, why.
+Z axes), whether it was applied (or the rig confirmed within 0.05 deg) and, if not, why.
 Outputs appear only when complete; drives already complete are skipped (--force redoes them).
 One bad drive is reported and the others still run; the exit status is the number that failed.
 
