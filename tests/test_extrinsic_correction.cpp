@@ -10,8 +10,6 @@
 #include <sstream>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "check.h"
 #include "dps/calib/extrinsic_correction.h"
 #include "dps/camera/rig_io.h"
@@ -28,11 +26,6 @@
 namespace {
 
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
-
-// The angle between two rotations, degrees.
-double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  return Eigen::AngleAxisd(a * b.transpose()).angle() / kDeg;
-}
 
 struct Drive {
   dps::Scene scene;
@@ -69,7 +62,7 @@ void TestCorrectsTurnedCameras(const Drive& d) {
     CHECK(e.rms_px < e.rms_before_px);
     const dps::RigCamera corrected = dps::CorrectedCamera(believed, e);
     // Corrected to a tenth of the error or better; the standard error says how well.
-    const double left = AngleDeg(corrected.vehicle_from_camera.R, truth.vehicle_from_camera.R);
+    const double left = dps::RotationAngleDeg(corrected.vehicle_from_camera.R, truth.vehicle_from_camera.R);
     CHECK(left < 0.05);
     CHECK(e.sigma_deg.maxCoeff() < 0.05);
     std::printf("%s: 0.5 deg off -> %.3f deg (estimate %.3f %.3f %.3f deg, sigma %.3f, %d tracks, %.2f -> %.2f px)\n",
@@ -99,7 +92,7 @@ void TestNoMotion(const Drive& d) {
   CHECK(e.reason.find("frame pairs") != std::string::npos);
   CHECK_EQ(e.rotation_deg.norm(), 0.0);
   const dps::RigCamera same = dps::CorrectedCamera(d.scene.rig.cameras[0], e);
-  CHECK(AngleDeg(same.vehicle_from_camera.R, d.scene.rig.cameras[0].vehicle_from_camera.R) < 1e-9);
+  CHECK(dps::RotationAngleDeg(same.vehicle_from_camera.R, d.scene.rig.cameras[0].vehicle_from_camera.R) < 1e-9);
 }
 
 void TestBadInputs(const Drive& d) {

@@ -1,6 +1,7 @@
 #include "dps/calib/extrinsic_correction.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -184,7 +185,8 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
     // keeps its scale and shape (the tracker's window model holds) and sits within the rig's error
     // of where frame j shows it.
     const Pose j_from_i_pose = (poses[i].ToPose3().Inverse() * poses[j].ToPose3()).Inverse();
-    const cv::Mat map = RoadWarp(camera, j_from_i_pose.Inverse(), roi);
+    const Pose i_from_j = j_from_i_pose.Inverse();
+    const cv::Mat map = RoadWarp(camera, i_from_j, roi);
     cv::Mat warped;
     cv::remap(grey[i], warped, map, cv::noArray(), cv::INTER_LINEAR, cv::BORDER_CONSTANT);
     std::vector<cv::Point2f> corners, to, back;  // in the roi
@@ -218,7 +220,7 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
       // Where the corner came from in frame i (its ray; the warp's exact value).
       Track k;
       Eigen::Vector2d at;
-      if (!RoadPixel(camera, j_from_i_pose.Inverse(), {corners[n].x, corners[n].y}, &at) ||
+      if (!RoadPixel(camera, i_from_j, {corners[n].x, corners[n].y}, &at) ||
           !camera.model.Unproject(at, &k.ray_i)) {
         continue;
       }
@@ -239,20 +241,26 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
   Eigen::Matrix3d JtWJ = Eigen::Matrix3d::Zero();
   double weighted_squares = 0.0, weights = 0.0;
-  auto residual = [&](const Track& k, const Eigen::Vector3d& at, Eigen::Vector2d* r) {
-    return Residual(k, camera.model, RotationFromVector(at) * R0, t, j_from_i, r);
+  // The camera turned by a rotation vector (the rig's R at zero).
+  const auto turned = [&](const Eigen::Vector3d& at) -> Eigen::Matrix3d { return RotationFromVector(at) * R0; };
+  const auto residual = [&](const Track& k, const Eigen::Matrix3d& R, Eigen::Vector2d* r) {
+    return Residual(k, camera.model, R, t, j_from_i, r);
   };
   // Each track's Jacobian at the rig (central differences): over the fraction of a degree the
   // estimate moves, it does not change enough to matter.
   std::vector<Eigen::Matrix<double, 2, 3>> jacobians(tracks.size());
   std::vector<bool> usable(tracks.size(), false);
   constexpr double h = 1e-5;
+  std::array<Eigen::Matrix3d, 3> ahead, behind;  // the rig turned by +-h about each axis
+  for (int a = 0; a < 3; ++a) {
+    ahead[a] = turned(Eigen::Vector3d::Unit(a) * h);
+    behind[a] = turned(-Eigen::Vector3d::Unit(a) * h);
+  }
   for (size_t n = 0; n < tracks.size(); ++n) {
     bool ok = true;
     for (int a = 0; a < 3 && ok; ++a) {
       Eigen::Vector2d plus, minus;
-      const Eigen::Vector3d step = Eigen::Vector3d::Unit(a) * h;
-      ok = residual(tracks[n], step, &plus) && residual(tracks[n], -step, &minus);
+      ok = residual(tracks[n], ahead[a], &plus) && residual(tracks[n], behind[a], &minus);
       if (ok) jacobians[n].col(a) = (plus - minus) / (2 * h);
     }
     usable[n] = ok;
@@ -262,9 +270,10 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
     JtWJ.setZero();
     Eigen::Vector3d JtWr = Eigen::Vector3d::Zero();
     weighted_squares = weights = 0.0;
+    const Eigen::Matrix3d R = turned(w);
     for (size_t n = 0; n < tracks.size(); ++n) {
       Eigen::Vector2d r;
-      if (!usable[n] || !residual(tracks[n], w, &r)) continue;
+      if (!usable[n] || !residual(tracks[n], R, &r)) continue;
       const Eigen::Matrix<double, 2, 3>& J = jacobians[n];
       const double weight = 1.0 / (1.0 + r.squaredNorm() / (now * now));
       JtWJ += weight * J.transpose() * J;
@@ -280,9 +289,10 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
   }
   // Inliers: within three scales of the estimate (and of the rig, for the residual before).
   double before = 0.0, after = 0.0;
+  const Eigen::Matrix3d R = turned(w);
   for (const Track& k : tracks) {
     Eigen::Vector2d r0, r1;
-    if (!residual(k, Eigen::Vector3d::Zero(), &r0) || !residual(k, w, &r1) || r1.norm() > 3 * scale) continue;
+    if (!residual(k, R0, &r0) || !residual(k, R, &r1) || r1.norm() > 3 * scale) continue;
     before += r0.squaredNorm();
     after += r1.squaredNorm();
     ++c.tracks;
