@@ -722,6 +722,30 @@ void TestPoleBeyondCar() {
   CHECK_EQ(with_rule, 1);
 }
 
+// The height a front detection reports is the object's top above the road (object_attributes.h
+// classes by it): a parked car (1.5 m) and a pole (3 m) ahead, one frame. Counting the rows an
+// object fills with its disparity instead gave about half of a pole's or a truck's height (their
+// faces untextured between the edges).
+void TestObjectHeights() {
+  dps::FrontDetectorOptions options = ParkedRowFrontOptions();
+  options.temporal_max_variance_px2 = 0;  // one frame
+  std::vector<dps::TruthRow> truth;
+  const std::vector<dps::Detection> detections =
+      FrontOfParkedRow({Parked(1, "car", 3.4, 8.0, 3), Parked(2, "pole", -2.9, 11.6, 0)}, options, 0, &truth);
+  for (const dps::TruthRow& t : truth) {
+    const double tolerance = std::max(0.75, 0.1 * dps::NearPoint(t).norm());
+    int measured = 0;
+    for (const dps::Detection& d : detections) {
+      if (dps::DistanceToFootprint(t, {d.x_m, d.z_m}) > tolerance) continue;
+      std::printf("  %s %.1f m high: detection's height %.2f m\n", t.kind.c_str(), t.height_m, d.height_m);
+      // Two rows of the view at 12 m are 0.14 m.
+      CHECK_NEAR(d.height_m, t.height_m, 0.25);
+      ++measured;
+    }
+    CHECK(measured >= 1);
+  }
+}
+
 // Every detector and pipeline setting is checked: a value out of range is an error naming it.
 void TestOptionChecks() {
   const dps::Rig rig = dps::ReadRig(std::string(DPS_SOURCE_DIR) + "/data/rigs/omni_pair.yaml");
@@ -768,6 +792,7 @@ int main() {
   TestSideCoverage();
   TestRenderedFront();
   TestPoleBeyondCar();
+  TestObjectHeights();
   TestCarsInRow();
   TestRowOnTheLeft();
   TestDriftCorrection();

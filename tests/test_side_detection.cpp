@@ -94,6 +94,13 @@ void TestParkedBeside() {
   const dps::SideResult r = Detect(p, "right", dps::Side::kRight);
   CHECK(r.view_scale < 1.0);
   CheckPlacement(r, p.truth, "parked car beside, right camera, 640x480");
+  // Its height, the top above the road: the view sees the car's upper body (uniform paint) only in
+  // part at 1.5 m, so the height is a lower bound here, but never above the car (the half window
+  // the matcher carries its disparity above its top edge is taken off).
+  if (!r.detections.empty()) {
+    std::printf("  height %.2f m, truth %.2f m\n", r.detections[0].height_m, p.truth.height_m);
+    CHECK(r.detections[0].height_m > 0.5 * p.truth.height_m && r.detections[0].height_m <= p.truth.height_m + 0.1);
+  }
   // The frame's sector: the matched columns of the shrunk views span less than at full size, and
   // everything found lies in it.
   const dps::Sector full = dps::PipelineCoverage(p.rig, dps::DefaultPipelineOptions(p.rig)).sectors[2];  // a copy

@@ -116,7 +116,7 @@ bool FrontDetector::InComponent(const FrontMatch& m, const cv::Mat& labels, int 
 }
 
 double FrontDetector::TopHeight(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels,
-                                const HistogramComponent& c) const {
+                                const HistogramComponent& c, int below_rows) const {
   const ViewSpec& s = view.spec();
   const Eigen::Vector3d& t = view.viewpoint_vehicle();
   std::vector<double> tops;
@@ -127,7 +127,7 @@ double FrontDetector::TopHeight(const VirtualView& view, const FrontMatch& m, co
       // above the road's, so > 0): its point's height above the road.
       const float v = m.disparity.at<float>(y, x);
       const double depth = s.focal_px * baseline_m_ / v;
-      const Eigen::Vector3d p((x - s.cx) * depth / s.focal_px, (y - s.cy) * depth / s.focal_px, depth);
+      const Eigen::Vector3d p((x - s.cx) * depth / s.focal_px, (y + below_rows - s.cy) * depth / s.focal_px, depth);
       tops.push_back(-(t + s.vehicle_from_view * p).y());
       break;
     }
@@ -272,15 +272,6 @@ std::vector<double> FrontDetector::ColumnHeights(const FrontMatch& m, const cv::
   return heights;
 }
 
-// The component's height: the height three quarters of its columns reach (NaN: no column).
-double FrontDetector::ComponentHeight(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const {
-  std::vector<double> heights = ColumnHeights(m, labels, c);
-  if (heights.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const size_t k = heights.size() / 4;
-  std::nth_element(heights.begin(), heights.begin() + k, heights.end(), std::greater<double>());
-  return heights[k];
-}
-
 // An obstacle stands up from the road: in each column it fills many rows with its disparity.
 // Flat things (lane markings, road matched wrongly) and stray matches fill few. The component's
 // height is the median of its columns'.
@@ -319,7 +310,10 @@ void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, s
     if (row >= 0 && row < m->obstacle.rows) m->obstacle.at<float>(row, x) = d;
   }
   Detection det = DetectionFromPoints(points, "front");
-  det.height_m = ComponentHeight(*m, labels, c);
+  // The object's top above the road (object_attributes.h classes by it), less the half window the
+  // matcher carries the object's disparity above its top edge.
+  const double top = TopHeight(view, *m, labels, c, options_.stereo.block_height / 2);
+  det.height_m = std::isfinite(top) ? std::max(0.0, top) : top;
   const int margin = options_.stereo.block_width;
   if (c.x_begin <= valid_columns.first + margin) det.clipped_ends.push_back(points.front());
   if (c.x_end - 1 >= valid_columns.second - margin) det.clipped_ends.push_back(points.back());

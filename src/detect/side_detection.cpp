@@ -46,11 +46,13 @@ double Median(std::vector<double> v) {
 
 // The depth of a vehicle-frame point along the view's axis.
 // One column of a component: where it meets the road (view pixel and ground point), its depth
-// along the view axis, its disparity and its height above the road.
+// along the view axis, its disparity, its height (the rows it fills with its disparity) and its
+// top's height above the road (the highest of those rows, less the half window the matcher
+// carries the object's disparity above its top edge).
 struct Contact {
   int x = 0, y = 0;
   Eigen::Vector2d ground{0, 0};
-  double depth = 0.0, disparity = 0.0, height = 0.0;
+  double depth = 0.0, disparity = 0.0, height = 0.0, top = 0.0;
 };
 
 // A rigid object that moves parallel to the views (or stands still) has, in every column,
@@ -106,12 +108,13 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
   std::vector<Contact> contacts;
   for (int x = c.x_begin; x < c.x_end; ++x) {
     // The component's pixels in this column; the bottom-most is the contact with the road.
-    int bottom = -1, rows = 0;
+    int top = -1, bottom = -1, rows = 0;
     for (int y = 0; y < spec.height; ++y) {
       const float v = s.disparity.at<float>(y, x);
       if (!std::isfinite(v) || s.score.at<float>(y, x) <= 0) continue;
       const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
       if (bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label) {
+        if (top < 0) top = y;
         bottom = y;
         ++rows;
       }
@@ -140,6 +143,7 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     k.ground = Eigen::Vector2d(g.x(), g.z());
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
+    k.top = std::max(0, contact - top - o.stereo.block_height / 2) * k.depth / spec.focal_px;
     contacts.push_back(k);
   }
   return contacts;
@@ -403,10 +407,11 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
     contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
     std::vector<Eigen::Vector2d> points;
-    std::vector<double> heights, disparities;
+    std::vector<double> heights, tops, disparities;
     std::vector<const Contact*> kept;
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
+      tops.push_back(k.top);
       if (k.ground.norm() > options_.max_range_m || k.depth > options_.max_depth_m) continue;
       points.push_back(k.ground);
       disparities.push_back(std::abs(k.disparity));
@@ -420,9 +425,9 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     }
     for (const Contact* k : kept) r.obstacle.at<std::uint8_t>(k->y, k->x) = 255;
     Detection det = DetectionFromPoints(points, camera_.name);
-    // The object's height: three quarters of its columns reach at least this high.
-    std::nth_element(heights.begin(), heights.begin() + heights.size() / 4, heights.end(), std::greater<double>());
-    det.height_m = heights[heights.size() / 4];
+    // The object's top above the road: three quarters of its columns reach at least this high.
+    std::nth_element(tops.begin(), tops.begin() + tops.size() / 4, tops.end(), std::greater<double>());
+    det.height_m = tops[tops.size() / 4];
     if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
     if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
     det.id = id++;

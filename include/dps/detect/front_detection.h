@@ -155,14 +155,13 @@ class FrontDetector {
   void DetectWith(Reference& ref, FrontMatch* m);
   // The steps of DetectWith: the reference's disparity (masked, temporally filtered); whether two
   // parts of the histogram are one surface; whether a component stands up from the road; and a
-  // component kept as a detection of `ref` when it lies on its side, with its height (per column its
-  // rows in `labels` times B / d).
+  // component kept as a detection of `ref` when it lies on its side, with its height (TopHeight less
+  // the half window the matcher carries its disparity above its top edge).
   cv::Mat MatchReference(Reference& ref);
   bool Linked(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& a, int x0,
               float d0, const HistogramComponent& b, int x1, float d1) const;
   bool StandsUp(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const;
   std::vector<double> ColumnHeights(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const;
-  double ComponentHeight(const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const;
   void Keep(const VirtualView& view, const HistogramComponent& c, std::pair<int, int> valid_columns, Reference& ref,
             FrontMatch* m, const cv::Mat& labels) const;
   // The ground point of a reference view's column x at disparity d (eq. 16).
@@ -170,9 +169,10 @@ class FrontDetector {
   // Whether pixel (x, y) votes for component `label`: a scored disparity in one of its bins.
   bool InComponent(const FrontMatch& m, const cv::Mat& labels, int label, int x, int y) const;
   // How high a component reaches above the road: of its columns' highest pixels (disparity in
-  // the component's bins), the height three quarters of the columns reach; NaN when none.
-  double TopHeight(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels,
-                   const HistogramComponent& c) const;
+  // the component's bins), each taken `below_rows` rows lower, the height three quarters of the
+  // columns reach; NaN when none.
+  double TopHeight(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c,
+                   int below_rows = 0) const;
   // The ground point of a component's first (or last) column with a centroid; false if none.
   bool OuterPoint(const VirtualView& view, const HistogramComponent& c, bool last, Eigen::Vector2d* ground) const;
 
