@@ -236,11 +236,11 @@ int Check(const dps_cli::Args& args, const dps::Rig& rig) {
   } else if (args.Has("frame")) {
     throw dps::Error("check: --frame needs --lanes");
   }
+  const double range_m = args.Number("range", 20.0), grid_m = args.Number("grid", 1.0);
   for (const auto& [camera, image] : images) {
     const dps::RigCamera& c = rig.Camera(camera);
-    cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, image, c.model), args.Number("range", 20.0),
-                                      args.Number("grid", 1.0));
-    if (!lanes.empty()) dps::DrawLaneBoundaries(c, lanes, args.Number("range", 20.0), &drawn);
+    cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, image, c.model), range_m, grid_m);
+    if (!lanes.empty()) dps::DrawLaneBoundaries(c, lanes, range_m, &drawn);
     const std::string out = (std::filesystem::path(dir) / ("check_" + c.name + "." + ext)).string();
     dps::WriteImageAtomically(out, drawn);
     std::cerr << c.name << ": " << out << "\n";
