@@ -187,6 +187,7 @@ void SideDetectorOptions::Check() const {
   Require(focal_px > 0 && focal_px <= 100.0 * view_width, "focal_px", focal_px, "> 0 and at most 100 view widths");
   Require(horizon_fraction > 0 && horizon_fraction < 1, "horizon_fraction", horizon_fraction, "0 < h < 1");
   Require(pacing_persistence_m >= 0, "pacing_persistence_m", pacing_persistence_m, ">= 0 (0 = no test)");
+  Require(max_vehicle_width_m >= 0, "max_vehicle_width_m", max_vehicle_width_m, ">= 0 (0 = no test)");
   Require(back_half_angle_deg >= 0 && back_half_angle_deg < 80, "back_half_angle_deg", back_half_angle_deg, "0 <= a < 80");
   Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
   Require(max_depth_m > 0, "max_depth_m", max_depth_m, "> 0");
@@ -419,9 +420,15 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     }
     if (points.empty() || Median(heights) < options_.min_obstacle_height_m) continue;
     last_components_.push_back(points);
-    if (options_.pacing_persistence_m > 0 && Median(disparities) < options_.min_motion_disparity_px &&
-        !Persisting(points, last_components, options_.pacing_persistence_m)) {
+    const bool pacing = Median(disparities) < options_.min_motion_disparity_px;
+    if (pacing && options_.pacing_persistence_m > 0 && !Persisting(points, last_components, options_.pacing_persistence_m)) {
       continue;
+    }
+    if (pacing && options_.max_vehicle_width_m > 0) {
+      const auto [nearest, farthest] = std::minmax_element(kept.begin(), kept.end(), [](const Contact* a, const Contact* b) {
+        return a->depth < b->depth;
+      });
+      if ((*farthest)->depth - (*nearest)->depth > options_.max_vehicle_width_m) continue;
     }
     for (const Contact* k : kept) r.obstacle.at<std::uint8_t>(k->y, k->x) = 255;
     Detection det = DetectionFromPoints(points, camera_.name);

@@ -91,6 +91,11 @@ struct SideDetectorOptions {
   // distance of a contact point of one of the previous frame's components (any, kept or not;
   // Persisting). m; 0 = no test.
   double pacing_persistence_m = 0.5;
+  // Something keeping pace with us is a vehicle: its contacts span no more across the direction of
+  // travel (their depths along the view's axis) than the widest road vehicle (trucks and buses are
+  // 2.55 m wide). A band of road or verge that the matcher left at zero disparity spans metres.
+  // m; 0 = no test.
+  double max_vehicle_width_m = 2.6;
 
   SideDetectorOptions();
   // Throws dps::Error naming the field, its value and the violated constraint (the stereo and
