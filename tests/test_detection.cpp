@@ -759,6 +759,9 @@ void TestOptionChecks() {
   bad.side.horizon_fraction = 1.5;
   CHECK_THROWS_WITH(bad.Check(), dps::Error, "side detector option horizon_fraction = 1.5");
   bad = o;
+  bad.side.max_vehicle_width_m = -1.0;
+  CHECK_THROWS_WITH(bad.Check(), dps::Error, "side detector option max_vehicle_width_m = -1");
+  bad = o;
   bad.vehicle_width_m = -1.0;
   CHECK_THROWS_WITH(dps::SurroundPipeline(rig, bad), dps::Error, "pipeline option vehicle_width_m = -1");
   bad = o;

@@ -240,6 +240,7 @@ void TestVergeKeepingPace() {
   dps::Scene scene = dps::ReadScene(path);
   dps::ResizeScene(&scene, 640, 480);
   const dps::RandomizedScene r = dps::Randomize(scene, 4, dps::ReadRandomizeOptions(path));
+  CHECK(r.video && r.scene.render.kerb_height_m > 0);  // the drive described above
   const fs::path root = dps_test::ScratchDir("dps_test_verge_keeping_pace");
   dps::SynthOptions so;
   so.frames = 20;
