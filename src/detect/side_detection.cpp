@@ -44,7 +44,6 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// The depth of a vehicle-frame point along the view's axis.
 // One column of a component: where it meets the road (view pixel and ground point), its depth
 // along the view axis, its disparity, its height (the rows it fills with its disparity) and its
 // top's height above the road (the highest of those rows, less the half window the matcher

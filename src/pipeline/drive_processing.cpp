@@ -400,12 +400,12 @@ class PictureOutputs {
 // to correct and only adds its noise: it is off.
 PipelineOptions DrivePipelineOptions(const DriveOptions& o, const Rig& rig, const DriveSummary& s) {
   PipelineOptions p = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
-  bool corrected = true;
+  bool verified = true;
   for (const char* camera : {"left", "right"}) {
     const auto it = s.extrinsics.find(camera);
-    corrected = corrected && it != s.extrinsics.end() && it->second.verified;
+    verified = verified && it != s.extrinsics.end() && it->second.verified;
   }
-  if (corrected) p.front.drift_interval = 0;
+  if (verified) p.front.drift_interval = 0;
   return p;
 }
 
