@@ -762,6 +762,9 @@ void TestOptionChecks() {
   bad.side.max_vehicle_width_m = -1.0;
   CHECK_THROWS_WITH(bad.Check(), dps::Error, "side detector option max_vehicle_width_m = -1");
   bad = o;
+  bad.side.static_gate = -0.5;
+  CHECK_THROWS_WITH(bad.Check(), dps::Error, "side detector option static_gate = -0.5");
+  bad = o;
   bad.vehicle_width_m = -1.0;
   CHECK_THROWS_WITH(dps::SurroundPipeline(rig, bad), dps::Error, "pipeline option vehicle_width_m = -1");
   bad = o;

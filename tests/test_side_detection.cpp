@@ -1,6 +1,7 @@
 // Side obstacles by motion stereo (section V-B) on rendered frame pairs with known truth: a car
 // parked beside the road at 8 m/s and 15 fps (its disparity at full view size would exceed the
-// range, so the views shrink), a car overtaking on the left (placed where it is in the
+// range, so the views shrink), a wall standing 5.9 m out (placed where its disparity says, not
+// short by its foot's row), a car overtaking on the left (placed where it is in the
 // current frame, not where it was in the previous one), a car keeping pace on the right (from its
 // second pair on), and consecutive frames taking the last frame's view instead of rendering it
 // again.
@@ -120,6 +121,47 @@ void TestParkedBeside() {
   const Pair small = Render(car, "right", 320, 240);
   CheckPlacement(Detect(small, "right", dps::Side::kRight), small.truth, "parked car beside, right, 320x240",
                  kVelocityTol320Mps);
+}
+
+// A wall standing 5.9 m from the right camera at 8 m/s: the views shrink (to 9/16), so one row
+// below the wall's foot spans 0.3 m of road, and the windows carry the wall's disparity below its
+// foot: its bottom-most pixel alone puts it short (on the randomised drives by up to 1.5 m). Its
+// disparity says where it stands (static_gate 2); placed by its foot alone (static_gate 0, the
+// default), it is nearer than it stands.
+void TestStandingFarOut() {
+  dps::SceneObject wall;
+  wall.kind = "wall";
+  wall.length_m = 6.0;
+  wall.width_m = 0.3;
+  wall.height_m = 1.4;
+  wall.start.x_m = 7.05;
+  wall.start.z_m = 1.0;
+  const Pair p = Render(wall, "right", 640, 480);
+  const double face = p.truth.x_m - p.truth.width_m / 2;
+  dps::SideDetectorOptions options = dps::DefaultPipelineOptions(p.rig).side;
+  double nearest[2] = {0, 0};
+  for (const double gate : {2.0, 0.0}) {
+    options.static_gate = gate;
+    dps::SideDetector detector(p.rig, "right", dps::Side::kRight, options);
+    const dps::SideResult r = detector.Detect(p.previous, p.current, p.current_in_previous, p.interval_s);
+    std::vector<double> x;
+    for (const dps::Detection& d : r.detections) {
+      for (const Eigen::Vector2d& q : d.points) x.push_back(q.x());
+    }
+    std::sort(x.begin(), x.end());
+    nearest[gate == 0.0] = x.empty() ? 0.0 : x[x.size() / 2];
+    std::printf("wall beside (face at x = %.2f m), static_gate %.1f: %zu detection(s), view scale %.3f, median x %.2f m\n",
+                face, gate, r.detections.size(), r.view_scale, nearest[gate == 0.0]);
+    if (gate > 0) {
+      CHECK_EQ(r.detections.size(), size_t{1});
+      CHECK(r.view_scale < 1.0);
+      CHECK_NEAR(nearest[0], face, 0.02 * face);
+      // Standing, it moves with the road: its velocity near zero.
+      if (!r.detections.empty()) CHECK_NEAR(r.detections[0].motion_mps, 0.0, kVelocityTolMps);
+    }
+  }
+  // By its foot alone: short of the wall, more than twice as far off.
+  CHECK(nearest[1] < face && face - nearest[1] > 2 * std::abs(nearest[0] - face));
 }
 
 void TestOvertakingLeft() {
@@ -331,6 +373,7 @@ void TestContinuing() {
 int main() {
   TestPersisting();
   TestParkedBeside();
+  TestStandingFarOut();
   TestOvertakingLeft();
   TestPacingRight();
   TestVergeKeepingPace();

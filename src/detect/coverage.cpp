@@ -15,7 +15,8 @@ Eigen::Vector2d Sector::Vertex() const {
 
 bool Sector::Contains(const Eigen::Vector2d& p) const {
   const Eigen::Vector2d d = p - Vertex();
-  return std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) <= half_angle_rad;
+  // A point on an edge is inside (1e-9 rad: the rounding of points computed on an edge's ray).
+  return std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) <= half_angle_rad + 1e-9;
 }
 
 bool Coverage::Contains(const Eigen::Vector2d& p) const {

@@ -45,13 +45,14 @@ double Median(std::vector<double> v) {
 }
 
 // One column of a component: where it meets the road (view pixel and ground point), its depth
-// along the view axis, its disparity, its height (the rows it fills with its disparity) and its
-// top's height above the road (the highest of those rows, less the half window the matcher
-// carries the object's disparity above its top edge).
+// along the view axis (a static object's from its disparity too: StaticDepth), its disparity, its
+// height (the rows it fills with its disparity) and its top's height above the road (the highest
+// of those rows, less the half window the matcher carries the object's disparity above its top
+// edge); row_depth: the depth of its lowest pixel's ground point alone, which max_depth_m limits.
 struct Contact {
   int x = 0, y = 0;
   Eigen::Vector2d ground{0, 0};
-  double depth = 0.0, disparity = 0.0, height = 0.0, top = 0.0;
+  double depth = 0.0, disparity = 0.0, height = 0.0, top = 0.0, row_depth = 0.0;
 };
 
 // A rigid object that moves parallel to the views (or stands still) has, in every column,
@@ -96,8 +97,31 @@ struct ContactSearch {
   const cv::Mat& labels;  // FindComponents' labels of the column histogram
   const cv::Mat& ignore;
   const cv::Mat& road;    // the road's disparity
+  double baseline_m;      // the camera's displacement between the two views
   const SideDetectorOptions& options;
 };
+
+// The depth of a static object at `disparity` (f B / d) combined with its contact's, when the two
+// agree within their errors: the contact's row is known to half a matching window (the matcher
+// carries an object's disparity that far below its bottom edge; one row spans D^2 / (f h) of road
+// at depth D, camera height h), the disparity to disparity_sigma_px. False when they disagree (the
+// object moves) or the disparity is below min_motion_disparity_px (keeping pace or coming towards
+// us: no static depth, or one too far and too uncertain to place anything).
+bool StaticDepth(const ContactSearch& s, int x, int contact_row, double contact_depth, double disparity, double* depth) {
+  const SideDetectorOptions& o = s.options;
+  if (!(disparity >= o.min_motion_disparity_px)) return false;
+  const ViewSpec& spec = s.reference.spec();
+  const double static_depth = spec.focal_px * s.baseline_m / disparity;
+  const double static_sigma = static_depth * o.disparity_sigma_px / disparity;
+  Eigen::Vector3d above;
+  const int half = o.stereo.block_height / 2;
+  if (!PixelToGround(s.reference, x, contact_row - half, &above)) return false;  // the row says little
+  const double contact_sigma = std::max(1e-6, std::abs(ViewDepth(s.reference, above) - contact_depth));
+  if (std::abs(static_depth - contact_depth) > o.static_gate * std::hypot(static_sigma, contact_sigma)) return false;
+  const double ws = 1.0 / (static_sigma * static_sigma), wc = 1.0 / (contact_sigma * contact_sigma);
+  *depth = (ws * static_depth + wc * contact_depth) / (ws + wc);
+  return true;
+}
 
 // A component's contacts with the road, one per column where it has one.
 std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramComponent& c) {
@@ -129,8 +153,9 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     k.y = lowest;
     // Depth and disparity of the lowest matched pixel (for the motion); the contact with the
     // road, placed on the map, contact_trim_rows higher (vertical fattening; half a window for
-    // an object keeping pace with us over road of a different disparity).
-    k.depth = ViewDepth(s.reference, g);
+    // an object keeping pace with us over road of a different disparity); a static object's
+    // contact and depth where its disparity puts it (StaticDepth).
+    k.depth = k.row_depth = ViewDepth(s.reference, g);
     int trim = o.contact_trim_rows;
     const float road_here = s.road.at<float>(lowest, x);
     if (std::abs(disparity) < o.min_motion_disparity_px && std::isfinite(road_here) &&
@@ -140,6 +165,13 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     const int contact = std::max(0, lowest - trim);
     if (contact != lowest && !PixelToGround(s.reference, x, contact, &g)) continue;
     k.ground = Eigen::Vector2d(g.x(), g.z());
+    double depth = 0.0;
+    Eigen::Vector2d ground;
+    if (o.static_gate > 0 && StaticDepth(s, x, contact, ViewDepth(s.reference, g), disparity, &depth) &&
+        ColumnToGround(s.reference, x, spec.focal_px * s.baseline_m / depth, s.baseline_m, &ground)) {
+      k.ground = ground;
+      k.depth = depth;
+    }
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
     k.top = std::max(0, contact - top - o.stereo.block_height / 2) * k.depth / spec.focal_px;
@@ -199,6 +231,7 @@ void SideDetectorOptions::Check() const {
   Require(min_motion_disparity_px >= 0, "min_motion_disparity_px", min_motion_disparity_px, ">= 0");
   Require(max_contact_jump_m > 0, "max_contact_jump_m", max_contact_jump_m, "> 0");
   Require(disparity_sigma_px > 0, "disparity_sigma_px", disparity_sigma_px, "> 0");
+  Require(static_gate >= 0, "static_gate", static_gate, ">= 0 (0 = placed by the contact alone)");
   Require(max_gap_below_m >= 0, "max_gap_below_m", max_gap_below_m, ">= 0");
   Require(contact_tolerance_px >= 0, "contact_tolerance_px", contact_tolerance_px, ">= 0");
   Require(contact_trim_rows >= 0 && contact_trim_rows < view_height, "contact_trim_rows", contact_trim_rows, "0 <= rows < view_height");
@@ -214,10 +247,6 @@ SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = true;
   options_.histogram.Check();
-  const OptionCheck require("side detector");
-  require(options.contact_trim_rows >= 0, "contact_trim_rows", options.contact_trim_rows, ">= 0");
-  require(options.max_contact_jump_m > 0, "max_contact_jump_m", options.max_contact_jump_m, "> 0");
-  require(options.pacing_road_contrast_px > 0, "pacing_road_contrast_px", options.pacing_road_contrast_px, "> 0");
   matcher_ = std::make_unique<SadStereoMatcher>(options.stereo);
 }
 
@@ -396,7 +425,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
   r.obstacle = cv::Mat(spec.height, spec.width, CV_8U, cv::Scalar(0));
   const auto [first_valid, last_valid] = ValidColumns(r.disparity);
   const int margin = options_.stereo.block_width;
-  const ContactSearch search{*m.reference, r.disparity, r.score, labels, m.geometry->ignore, road, options_};
+  const ContactSearch search{*m.reference, r.disparity, r.score, labels, m.geometry->ignore, road, r.baseline_m, options_};
   // The last call's components count for the pacing test only when it matched the previous frame.
   std::vector<std::vector<Eigen::Vector2d>> last_components;
   if (continuing) last_components.swap(last_components_);
@@ -412,7 +441,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
       tops.push_back(k.top);
-      if (k.ground.norm() > options_.max_range_m || k.depth > options_.max_depth_m) continue;
+      if (k.ground.norm() > options_.max_range_m || k.row_depth > options_.max_depth_m) continue;
       points.push_back(k.ground);
       disparities.push_back(std::abs(k.disparity));
       kept.push_back(&k);

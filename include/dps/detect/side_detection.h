@@ -9,8 +9,9 @@
 // score counts distance from it in either direction. Column histograms give the components;
 // each component's pixels are traced back in the disparity image and, per column, the
 // bottom-most one is taken as the object's contact with the ground: its ray meets the road
-// plane (eq. 17-18, from the real view geometry). Points are reported in the vehicle frame of the
-// current frame.
+// plane (eq. 17-18, from the real view geometry); optionally, where that agrees with the depth a
+// static object at its disparity has, the two are combined (static_gate). Points are reported in
+// the vehicle frame of the current frame.
 #pragma once
 
 #include <map>
@@ -68,7 +69,13 @@ struct SideDetectorOptions {
   // (disparity near zero), and one such point 3 m short becomes the detection's nearest point.
   // m, > 0.
   double max_contact_jump_m = 1.0;
-  double disparity_sigma_px = 1.0;    // matching noise, for the velocity's uncertainty
+  double disparity_sigma_px = 1.0;    // matching noise: the velocity's uncertainty, a static depth's error
+  // A contact whose depth agrees with the depth a static object at its disparity would have (f B /
+  // d), within this many standard deviations of the two, is a static object's: its depth is the
+  // two combined (see side_detection.cpp; 2 lets a static object's contact pass 95 % of the time).
+  // >= 0; 0 = every contact placed by its row alone, the default until the parked rows' parts it
+  // splits off are merged again (docs/detection.md).
+  double static_gate = 0.0;
   // Below the bottom-most matched pixel, pixels with no disparity (up to max_gap_below_m at the
   // object's depth) or with the object's disparity (within contact_tolerance_px) still count as
   // the object: the contact with the road is the lowest of them.
