@@ -139,7 +139,7 @@ void TestStandingFarOut() {
   const Pair p = Render(wall, "right", 640, 480);
   const double face = p.truth.x_m - p.truth.width_m / 2;
   dps::SideDetectorOptions options = dps::DefaultPipelineOptions(p.rig).side;
-  double nearest[2] = {0, 0};
+  double median_x[2] = {0, 0};
   for (const double gate : {2.0, 0.0}) {
     options.static_gate = gate;
     dps::SideDetector detector(p.rig, "right", dps::Side::kRight, options);
@@ -149,19 +149,19 @@ void TestStandingFarOut() {
       for (const Eigen::Vector2d& q : d.points) x.push_back(q.x());
     }
     std::sort(x.begin(), x.end());
-    nearest[gate == 0.0] = x.empty() ? 0.0 : x[x.size() / 2];
+    median_x[gate == 0.0] = x.empty() ? 0.0 : x[x.size() / 2];
     std::printf("wall beside (face at x = %.2f m), static_gate %.1f: %zu detection(s), view scale %.3f, median x %.2f m\n",
-                face, gate, r.detections.size(), r.view_scale, nearest[gate == 0.0]);
+                face, gate, r.detections.size(), r.view_scale, median_x[gate == 0.0]);
     if (gate > 0) {
       CHECK_EQ(r.detections.size(), size_t{1});
       CHECK(r.view_scale < 1.0);
-      CHECK_NEAR(nearest[0], face, 0.02 * face);
+      CHECK_NEAR(median_x[0], face, 0.02 * face);
       // Standing, it moves with the road: its velocity near zero.
       if (!r.detections.empty()) CHECK_NEAR(r.detections[0].motion_mps, 0.0, kVelocityTolMps);
     }
   }
   // By its foot alone: short of the wall, more than twice as far off.
-  CHECK(nearest[1] < face && face - nearest[1] > 2 * std::abs(nearest[0] - face));
+  CHECK(median_x[1] < face && face - median_x[1] > 2 * std::abs(median_x[0] - face));
 }
 
 void TestOvertakingLeft() {
