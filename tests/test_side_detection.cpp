@@ -1,10 +1,10 @@
 // Side obstacles by motion stereo (section V-B) on rendered frame pairs with known truth: a car
 // parked beside the road at 8 m/s and 15 fps (its disparity at full view size would exceed the
 // range, so the views shrink), a wall standing 5.9 m out (placed where its disparity says, not
-// short by its foot's row), a car overtaking on the left (placed where it is in the
-// current frame, not where it was in the previous one), a car keeping pace on the right (from its
-// second pair on), and consecutive frames taking the last frame's view instead of rendering it
-// again.
+// short by its foot's row), a car's back just ahead of the camera (nothing placed past its end),
+// a car overtaking on the left (placed where it is in the current frame, not where it was in the
+// previous one), a car keeping pace on the right (from its second pair on), and consecutive frames
+// taking the last frame's view instead of rendering it again.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -162,6 +162,39 @@ void TestStandingFarOut() {
   }
   // By its foot alone: short of the wall, more than twice as far off.
   CHECK(median_x[1] < face && face - median_x[1] > 2 * std::abs(median_x[0] - face));
+}
+
+// A car parked beside with its back 0.2 m ahead of the right camera: the camera sees the back
+// edge-on and, past it, sky above and road below. The matcher carries the back's disparity some
+// columns on over the untextured sky, and lower down those columns meet the road where its
+// disparity is the back's own, so placed by their disparity (static_gate 2) they would look like
+// the back touching the road up to 0.4 m behind the car; the road farther away that shows between
+// the two says nothing stands there. Every point stays on the car's visible faces.
+void TestRearCornerAhead() {
+  dps::SceneObject car;
+  car.start.x_m = 3.4;
+  car.start.z_m = 3.87;  // 3.34 m in frame 1: its back at 1.09 m, the camera at 0.9 m
+  car.colour = 2;
+  const Pair p = Render(car, "right", 640, 480);
+  dps::SideDetectorOptions options = dps::DefaultPipelineOptions(p.rig).side;
+  options.static_gate = 2.0;
+  dps::SideDetector detector(p.rig, "right", dps::Side::kRight, options);
+  const dps::SideResult r = detector.Detect(p.previous, p.current, p.current_in_previous, p.interval_s);
+  const double back = p.truth.z_m - p.truth.length_m / 2;
+  double worst = 0.0, behind = 0.0;
+  int points = 0;
+  for (const dps::Detection& d : r.detections) {
+    for (const Eigen::Vector2d& q : d.points) {
+      worst = std::max(worst, dps::DistanceToFootprint(p.truth, q));
+      behind = std::max(behind, back - q.y());
+    }
+    points += d.n_points;
+  }
+  std::printf("car's back just ahead, static_gate 2: %zu detection(s), %d points, farthest %.2f m off its footprint, "
+              "%.2f m behind its back\n", r.detections.size(), points, worst, behind);
+  CHECK(points >= 20);
+  CHECK(behind <= kSideTolM);
+  CHECK(worst <= kSideTolM);
 }
 
 void TestOvertakingLeft() {
@@ -374,6 +407,7 @@ int main() {
   TestPersisting();
   TestParkedBeside();
   TestStandingFarOut();
+  TestRearCornerAhead();
   TestOvertakingLeft();
   TestPacingRight();
   TestVergeKeepingPace();

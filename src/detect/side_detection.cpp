@@ -123,6 +123,24 @@ bool StaticDepth(const ContactSearch& s, int x, int contact_row, double contact_
   return true;
 }
 
+// Whether the column shows a solid object above its contact: over min_obstacle_height_m up from
+// `lowest` (at the contact's depth) no pixel sees static road or background beyond the contact
+// (disparity below f B / depth by more than contact_tolerance_px and not the object's own). A
+// column past an object's end fails: the matcher carries the end's disparity into it over
+// untextured background, and where it meets the road at the end's depth that road has the end's
+// disparity, but between the two the road farther away shows.
+bool SolidAboveContact(const ContactSearch& s, int x, int lowest, double depth, double disparity) {
+  const SideDetectorOptions& o = s.options;
+  const ViewSpec& spec = s.reference.spec();
+  const double beyond = spec.focal_px * s.baseline_m / depth - o.contact_tolerance_px;
+  const int rows = static_cast<int>(std::ceil(o.min_obstacle_height_m * spec.focal_px / depth));
+  for (int y = lowest - 1; y >= std::max(0, lowest - rows); --y) {
+    const float d = s.disparity.at<float>(y, x);
+    if (std::isfinite(d) && d < beyond && std::abs(d - disparity) > o.contact_tolerance_px) return false;
+  }
+  return true;
+}
+
 // A component's contacts with the road, one per column where it has one.
 std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramComponent& c) {
   const SideDetectorOptions& o = s.options;
@@ -172,6 +190,9 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
       k.ground = ground;
       k.depth = depth;
     }
+    // Part of placing static objects by their disparity: with rows alone the columns it drops
+    // mostly stayed inside their object's detection, and dropping them cost precision elsewhere.
+    if (o.static_gate > 0 && !SolidAboveContact(s, x, lowest, k.depth, disparity)) continue;
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
     k.top = std::max(0, contact - top - o.stereo.block_height / 2) * k.depth / spec.focal_px;
