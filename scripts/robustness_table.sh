@@ -61,8 +61,11 @@ for size in $SIZES; do
       for f in "$drive"/*; do [ "$(basename "$f")" = rig.yaml ] || ln -s "$f" "$tdrive/"; done
       cp "$drive/rig_true.yaml" "$tdrive/rig.yaml"
       calibrated+=("$tdrive")
-      "$T/dps-synth" "$ROOT/data/scenes/calibration.yaml" --rig "$drive/rig_true.yaml" \
-        --processing-rig "$drive/rig.yaml" --frames 1 --out "$cal" --force --quiet
+      # Rendered once, as the drives are (a rerun with other code reuses both).
+      if [ ! -f "$cal/marks.csv" ]; then
+        "$T/dps-synth" "$ROOT/data/scenes/calibration.yaml" --rig "$drive/rig_true.yaml" \
+          --processing-rig "$drive/rig.yaml" --frames 1 --out "$cal" --force --quiet
+      fi
       if "$T/dps-calibrate" --rig "$drive/rig.yaml" --marks "$cal/marks.csv" --out "$cal/rig_calibrated.yaml" \
            > "$cal/report.txt" 2>&1; then
         mkdir -p "$cdrive"

@@ -4,7 +4,8 @@
 // short by its foot's row), a car's back just ahead of the camera (nothing placed past its end),
 // a car overtaking on the left (placed where it is in the current frame, not where it was in the
 // previous one), a car keeping pace on the right (from its second pair on), and consecutive frames
-// taking the last frame's view instead of rendering it again.
+// taking the last frame's view instead of rendering it again; no matching when the camera moved too
+// little to tell anything from the road.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -126,8 +127,8 @@ void TestParkedBeside() {
 // A wall standing 5.9 m from the right camera at 8 m/s: the views shrink (to 9/16), so one row
 // below the wall's foot spans 0.3 m of road, and the windows carry the wall's disparity below its
 // foot: its bottom-most pixel alone puts it short (on the randomised drives by up to 1.5 m). Its
-// disparity says where it stands (static_gate 2); placed by its foot alone (static_gate 0, the
-// default), it is nearer than it stands.
+// disparity says where it stands (static_gate 2, the default); placed by its foot alone
+// (static_gate 0), it is nearer than it stands.
 void TestStandingFarOut() {
   dps::SceneObject wall;
   wall.kind = "wall";
@@ -355,6 +356,30 @@ void TestPersisting() {
   CHECK(!dps::Persisting({{0.0, 0.0}}, {}, 0.5));
 }
 
+// Driving slowly: a static object as deep as the views keep (max_depth_m, 6 m) shifts f B / 6 m
+// between the frames; under min_motion_disparity_px (3 px) nothing there can be told from the road
+// or from something keeping pace with us, so the pair is not matched. With the views' focal length
+// f = 170 px at 640x480 that is under 3 x 6 / 170 = 0.106 m of camera motion (1.6 m/s at 15 fps),
+// with 85 px at 320x240 under 0.212 m.
+void TestSlowDriving() {
+  struct Size { int width, height; double limit_m; };
+  for (const Size size : {Size{640, 480, 3.0 * 6.0 / 170.0}, Size{320, 240, 3.0 * 6.0 / 85.0}}) {
+    dps::SceneObject car;
+    car.start.x_m = 3.4;
+    car.start.z_m = 1.5;
+    const Pair p = Render(car, "right", size.width, size.height);
+    for (const double step : {0.95 * size.limit_m, 1.05 * size.limit_m}) {
+      dps::SideDetector detector(p.rig, "right", dps::Side::kRight, dps::DefaultPipelineOptions(p.rig).side);
+      const dps::SideResult r = detector.Detect(p.previous, p.current, dps::PlanarPose{0.0, step, 0.0}, p.interval_s);
+      std::printf("slow driving, %dx%d, camera moved %.3f m: %s%s\n", size.width, size.height, r.baseline_m,
+                  r.skipped ? "skipped: " : "matched", r.reason.c_str());
+      CHECK_NEAR(r.baseline_m, step, 1e-9);
+      CHECK_EQ(r.skipped, step < size.limit_m);
+      if (r.skipped) CHECK(r.reason.find("min_motion_disparity_px") != std::string::npos);
+    }
+  }
+}
+
 // Consecutive frames (`continuing`): the previous view is the last call's current view, taken
 // as it was when the views are the same, with the same result as rendering and prefiltering it
 // again; not when the call does not continue the last one, nor when the view turned.
@@ -411,6 +436,7 @@ int main() {
   TestOvertakingLeft();
   TestPacingRight();
   TestVergeKeepingPace();
+  TestSlowDriving();
   TestContinuing();
   return dps_test::Report();
 }

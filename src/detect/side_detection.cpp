@@ -49,10 +49,14 @@ double Median(std::vector<double> v) {
 // height (the rows it fills with its disparity) and its top's height above the road (the highest
 // of those rows, less the half window the matcher carries the object's disparity above its top
 // edge); row_depth: the depth of its lowest pixel's ground point alone, which max_depth_m limits.
+// solid: the column shows the object, not the road beyond, above the contact (SolidAboveContact;
+// tested with static_gate on only); a column that does not still counts for the component's
+// height, but gives no point.
 struct Contact {
   int x = 0, y = 0;
   Eigen::Vector2d ground{0, 0};
   double depth = 0.0, disparity = 0.0, height = 0.0, top = 0.0, row_depth = 0.0;
+  bool solid = true;
 };
 
 // A rigid object that moves parallel to the views (or stands still) has, in every column,
@@ -190,9 +194,9 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
       k.ground = ground;
       k.depth = depth;
     }
-    // Part of placing static objects by their disparity: with rows alone the columns it drops
-    // mostly stayed inside their object's detection, and dropping them cost precision elsewhere.
-    if (o.static_gate > 0 && !SolidAboveContact(s, x, lowest, k.depth, disparity)) continue;
+    // Part of placing static objects by their disparity: with rows alone the columns it leaves out
+    // mostly stayed inside their object's detection, and leaving them out cost precision elsewhere.
+    k.solid = o.static_gate <= 0 || SolidAboveContact(s, x, lowest, k.depth, disparity);
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
     k.top = std::max(0, contact - top - o.stereo.block_height / 2) * k.depth / spec.focal_px;
@@ -380,6 +384,16 @@ bool SideDetector::MatchPair(const cv::Mat& previous_omni, const cv::Mat& curren
   m->direction = WorldToBodyDirection(current_in_previous, Eigen::Vector2d(delta.x(), delta.z()).normalized());
   const double sign = side_ == Side::kLeft ? 1.0 : -1.0;
   const int sixteenths = ScaleSixteenths(r->baseline_m);
+  // A static object as deep as the views keep (max_depth_m) must shift by min_motion_disparity_px:
+  // with less, nothing there is told from something keeping pace with us or from the road (slow
+  // driving, high frame rates, coarse images).
+  const double shift_px = options_.focal_px * sixteenths / 16.0 * r->baseline_m / options_.max_depth_m;
+  if (shift_px < options_.min_motion_disparity_px) {
+    r->skipped = true;
+    r->reason = Str("camera moved ", r->baseline_m, " m: a static object ", options_.max_depth_m, " m deep shifts ",
+                    shift_px, " px (< min_motion_disparity_px ", options_.min_motion_disparity_px, ")");
+    return false;
+  }
   r->view_scale = sixteenths / 16.0;
   SideViewCache& views = Views(sixteenths);
   const VirtualView& previous_view = views.Get(sign * alpha);
@@ -459,9 +473,15 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     std::vector<Eigen::Vector2d> points;
     std::vector<double> heights, tops, disparities;
     std::vector<const Contact*> kept;
+    // The height test over all the component's columns: the columns that are not solid are its low
+    // ones, and without them low components (road, kerbs) would pass it.
+    std::vector<Contact> solid;
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
       tops.push_back(k.top);
+      if (k.solid) solid.push_back(k);
+    }
+    for (const Contact& k : solid) {
       if (k.ground.norm() > options_.max_range_m || k.row_depth > options_.max_depth_m) continue;
       points.push_back(k.ground);
       disparities.push_back(std::abs(k.disparity));
@@ -487,8 +507,8 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
     if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
     det.id = id++;
-    if (interval_s > 0 && contacts.size() >= 3) {
-      MeasureMotion(contacts, r.baseline_m, spec.focal_px, interval_s, options_.disparity_sigma_px, &det);
+    if (interval_s > 0 && solid.size() >= 3) {
+      MeasureMotion(solid, r.baseline_m, spec.focal_px, interval_s, options_.disparity_sigma_px, &det);
       det.motion_direction = m.direction;
     }
     r.detections.push_back(std::move(det));

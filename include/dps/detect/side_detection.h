@@ -50,7 +50,10 @@ struct SideDetectorOptions {
   // depth squared over f B, m
   double max_depth_m = 6.0;
   double own_car_height_m = 0.9;
-  double min_baseline_m = 0.05;       // camera displacement below this: no motion stereo
+  // Camera displacement below this: no motion stereo; nor below min_motion_disparity_px x
+  // max_depth_m / f (the views' focal length f), where a static object as deep as the views keep
+  // would shift less than min_motion_disparity_px (slow driving, high frame rates, coarse images).
+  double min_baseline_m = 0.05;
   // Components lower than this (median) are dropped, and with static_gate on, columns where the
   // road beyond shows within this height above the contact; m.
   double min_obstacle_height_m = 0.5;
@@ -76,10 +79,9 @@ struct SideDetectorOptions {
   // A contact whose depth agrees with the depth a static object at its disparity would have (f B /
   // d), within this many standard deviations of the two, is a static object's: its depth is the
   // two combined (see side_detection.cpp; 2 lets a static object's contact pass 95 % of the time).
-  // With it on, columns past an object's end are left out (SolidAboveContact). >= 0; 0 = every
-  // contact placed by its row alone, the default: with it on, the report seeds' scores rose in
-  // most families but fell in stop and go (docs/detection.md).
-  double static_gate = 0.0;
+  // With it on, columns past an object's end give no point (SolidAboveContact). >= 0; 0 = every
+  // contact placed by its row alone.
+  double static_gate = 2.0;
   // Below the bottom-most matched pixel, pixels with no disparity (up to max_gap_below_m at the
   // object's depth) or with the object's disparity (within contact_tolerance_px) still count as
   // the object: the contact with the road is the lowest of them.
@@ -184,7 +186,7 @@ class SideDetector {
   };
   // Renders both views parallel to the camera's displacement and matches them (the previous view
   // is the last call's current one when `continuing`); fills r's baseline, views, disparity and
-  // sector. False (r skipped) when the camera moved less than min_baseline_m.
+  // sector. False (r skipped) when the camera moved too little (min_baseline_m).
   bool MatchPair(const cv::Mat& previous_omni, const cv::Mat& current_omni, const PlanarPose& current_in_previous,
                  bool continuing, SideResult* r, Matched* m);
   // The view scale for a baseline, in sixteenths.
