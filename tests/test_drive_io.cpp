@@ -282,6 +282,25 @@ void TestProcessDrive() {
   for (const auto& e : fs::directory_iterator(kTmp / "out")) {
     CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
   }
+  // Side views: matched in every frame after the first at the scene's speed; the same drive with a
+  // CAN log of 2 m/s (0.13 m between frames at 15 fps, under the 0.21 m at which a static object 6 m
+  // out shifts 3 px in 320x240's side views): none matched, and summary.json says so per camera.
+  CHECK_EQ(s.frames_side_skipped.at("left"), 0);
+  CHECK_EQ(s.frames_side_skipped.at("right"), 0);
+  const fs::path slow = kTmp / "drives" / "slow";
+  fs::remove_all(slow);
+  fs::copy(kTmp / "drives" / "lead", slow, fs::copy_options::recursive);
+  {
+    std::ofstream can(slow / "can.csv");
+    can << "t,speed,yaw_rate\n";
+    for (int i = 0; i <= 100; ++i) can << i * 0.01 << ",2,0\n";
+  }
+  const dps::DriveSummary slow_summary = dps::ProcessDrive(slow.string(), (kTmp / "out_slow").string(), o);
+  std::printf("slow drive: side views skipped in %d / %d frames (left / right)\n", slow_summary.frames_side_skipped.at("left"),
+              slow_summary.frames_side_skipped.at("right"));
+  CHECK_EQ(slow_summary.frames_side_skipped.at("left"), 5);
+  CHECK_EQ(slow_summary.frames_side_skipped.at("right"), 5);
+  CHECK(slow_summary.ToJson().find("\"frames_side_skipped\": {\"left\": 5, \"right\": 5}") != std::string::npos);
   CheckDriveMask(kTmp / "drives" / "lead", kTmp / "out_masked", o);
   CheckGridFiles(kTmp / "drives" / "lead", kTmp / "out_grid", o);
   // Left and right of different lengths: an error naming both, no output left behind.

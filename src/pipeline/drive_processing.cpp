@@ -45,7 +45,13 @@ std::string DriveSummary::ToJson() const {
   std::ostringstream o;
   o.precision(6);
   o << "{\n  \"drive\": " << JsonString(drive) << ",\n  \"frames\": " << frames
-    << ",\n  \"frames_without_motion\": " << frames_without_motion << ",\n  \"detections\": " << detections
+    << ",\n  \"frames_without_motion\": " << frames_without_motion << ",\n  \"frames_side_skipped\": {";
+  bool first_side = true;
+  for (const auto& [camera, n] : frames_side_skipped) {
+    o << (first_side ? "" : ", ") << JsonString(camera) << ": " << n;
+    first_side = false;
+  }
+  o << "},\n  \"detections\": " << detections
     << ",\n  \"front_vertical_offset_px\": " << front_vertical_offset_px << ",\n  \"map_video\": " << JsonString(map_video)
     << ",\n  \"seconds\": " << seconds << ",\n  \"frames_per_second\": " << frames_per_second
     << ",\n  \"masks\": {";
@@ -460,6 +466,8 @@ class DriveRun {
 // writing. It runs alongside the next frame's stereo (SurroundPipeline::Process), in order.
 void DriveRun::Finish(FrameOutput& out, int f) {
   auto t2 = Clock::now();
+  s_.frames_side_skipped["left"] += out.left.skipped;
+  s_.frames_side_skipped["right"] += out.right.skipped;
   std::vector<TrackState> frame_tracks = tracker_.Update(in_.ids[f], in_.times[f], ego_, out.detections);
   for (TrackState& t : frame_tracks) {
     t.lane = LaneOfPoint(out.lanes.boundaries, {t.x_m, t.z_m});

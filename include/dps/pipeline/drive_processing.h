@@ -73,6 +73,9 @@ struct DriveSummary {
   std::string output_dir;
   int frames = 0;
   int frames_without_motion = 0;  // side detection skipped for them
+  // By camera: frames whose side views were not matched though the motion was known, the camera
+  // having moved too little (SideDetectorOptions::min_baseline_m: driving slowly or standing).
+  std::map<std::string, int> frames_side_skipped;
   int detections = 0;
   double front_vertical_offset_px = 0.0;  // drift correction of the front pair at the end
   std::string map_video;          // the map video's file name and codec ("map.mp4 (H.264)"); "" = none
