@@ -50,7 +50,7 @@ double Median(std::vector<double> v) {
 // of those rows, less the half window the matcher carries the object's disparity above its top
 // edge); row_depth: the depth of its lowest pixel's ground point alone, which max_depth_m limits.
 // solid: the column shows the object, not the road beyond, above the contact (SolidAboveContact;
-// tested with static_gate on only); a column that does not still counts for the component's
+// tested with static_gate on only); a column that is not solid still counts for the component's
 // height, but gives no point.
 struct Contact {
   int x = 0, y = 0;
