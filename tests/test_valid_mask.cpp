@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -315,8 +316,13 @@ void TestOwnCarNeedsMotion() {
                     "min_road_to_car");
 }
 
-int main() {
-  TestOwnCarFromRenderedDrives();
+// `--rendered-drives`: the own car on the twelve rendered drives only (the slow part, CTest's
+// test_valid_mask_rendered, labelled slow); without it everything else.
+int main(int argc, char** argv) {
+  if (argc > 1 && std::string(argv[1]) == "--rendered-drives") {
+    TestOwnCarFromRenderedDrives();
+    return dps_test::Report();
+  }
   TestOwnCarNeedsMotion();
   TestEstimatedFieldEdge();
   TestRealFisheye();
