@@ -120,7 +120,13 @@ bool StaticDepth(const ContactSearch& s, int x, int contact_row, double contact_
   Eigen::Vector3d above;
   const int half = o.stereo.block_height / 2;
   if (!PixelToGround(s.reference, x, contact_row - half, &above)) return false;  // the row says little
-  const double contact_sigma = std::max(1e-6, std::abs(ViewDepth(s.reference, above) - contact_depth));
+  // ... and the road just before the object can be told from it only where their disparities differ
+  // by more than contact_tolerance_px: over D^2 contact_tolerance_px / (f B) of road in front of a
+  // static object the walk down (ExtendToContact) may carry the contact nearer (slow driving: a
+  // small B; a fine verge matched at the object's disparity).
+  const double row_sigma = std::abs(ViewDepth(s.reference, above) - contact_depth);
+  const double road_sigma = contact_depth * contact_depth * o.contact_tolerance_px / (spec.focal_px * s.baseline_m);
+  const double contact_sigma = std::max(1e-6, std::hypot(row_sigma, road_sigma));
   if (std::abs(static_depth - contact_depth) > o.static_gate * std::hypot(static_sigma, contact_sigma)) return false;
   const double ws = 1.0 / (static_sigma * static_sigma), wc = 1.0 / (contact_sigma * contact_sigma);
   *depth = (ws * static_depth + wc * contact_depth) / (ws + wc);
