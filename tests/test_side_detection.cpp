@@ -124,20 +124,26 @@ void TestParkedBeside() {
                  kVelocityTol320Mps);
 }
 
+// A wall 0.3 m thick along the road, the centre of its footprint `x_m` to the right of the car's
+// origin and 1 m ahead of it.
+dps::SceneObject Wall(double x_m, double length_m, double height_m) {
+  dps::SceneObject wall;
+  wall.kind = "wall";
+  wall.length_m = length_m;
+  wall.width_m = 0.3;
+  wall.height_m = height_m;
+  wall.start.x_m = x_m;
+  wall.start.z_m = 1.0;
+  return wall;
+}
+
 // A wall standing 5.9 m from the right camera at 8 m/s: the views shrink (to 9/16), so one row
 // below the wall's foot spans 0.3 m of road, and the windows carry the wall's disparity below its
 // foot: its bottom-most pixel alone puts it short (on the randomised drives by up to 1.5 m). Its
 // disparity says where it stands (static_gate 2, the default); placed by its foot alone
 // (static_gate 0), it is nearer than it stands.
 void TestStandingFarOut() {
-  dps::SceneObject wall;
-  wall.kind = "wall";
-  wall.length_m = 6.0;
-  wall.width_m = 0.3;
-  wall.height_m = 1.4;
-  wall.start.x_m = 7.05;
-  wall.start.z_m = 1.0;
-  const Pair p = Render(wall, "right", 640, 480);
+  const Pair p = Render(Wall(7.05, 6.0, 1.4), "right", 640, 480);
   const double face = p.truth.x_m - p.truth.width_m / 2;
   dps::SideDetectorOptions options = dps::DefaultPipelineOptions(p.rig).side;
   double median_x[2] = {0, 0};
@@ -172,14 +178,7 @@ void TestStandingFarOut() {
 // from the road it cannot be told from counts in weighing the two (StaticDepth).
 void TestStandingSlowBeyondVerge() {
   dps::Scene scene = dps_test::SmallScene("parked_cars", 640, 480);
-  dps::SceneObject wall;
-  wall.kind = "wall";
-  wall.length_m = 8.0;
-  wall.width_m = 0.3;
-  wall.height_m = 1.8;
-  wall.start.x_m = 7.0;
-  wall.start.z_m = 1.0;
-  scene.objects = {wall};
+  scene.objects = {Wall(7.0, 8.0, 1.8)};
   scene.ego = dps::MotionProfile({dps::MotionSample{0.0, 3.0, 0.0}});
   scene.render.verge_m = 0.2;
   scene.render.gravel_verge = true;

@@ -11,11 +11,10 @@
 #include "dps/camera/box.h"
 #include "dps/util/error.h"
 #include "dps/util/image.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A paint pixel: where it is in the image, its ray (camera frame) and where that ray meets the
 // road, relative to the camera's footprint (nominal geometry).

@@ -13,11 +13,11 @@
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
 #include "dps/util/image.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 constexpr int kWindow = 21;  // Lucas-Kanade's window, px
 constexpr double kStartScalePx = 4.0;  // the robust weights' first scale
 constexpr int kWarpStep = 4;  // px between the rays computed exactly (RoadRegion, RoadWarp)
@@ -285,7 +285,7 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
     const Eigen::Vector3d delta = -JtWJ.ldlt().solve(JtWr);
     if (!delta.allFinite()) break;
     w += delta;
-    if (now <= scale && delta.norm() < 1e-4 * kDeg) break;
+    if (now <= scale && delta.norm() < 1e-4 * kRadPerDeg) break;
   }
   // Inliers: within three scales of the estimate (and of the rig, for the residual before).
   double before = 0.0, after = 0.0;
@@ -304,10 +304,10 @@ ExtrinsicCorrection EstimateOnce(const std::vector<cv::Mat>& grey, const std::ve
   }
   c.rms_before_px = std::sqrt(before / c.tracks);
   c.rms_px = std::sqrt(after / c.tracks);
-  c.rotation_deg = w / kDeg;
+  c.rotation_deg = w * kDegPerRad;
   // The weighted residuals' variance per weight, spread by the normal equations.
   const Eigen::Matrix3d covariance = weighted_squares / std::max(1.0, 2 * weights - 3) * JtWJ.inverse();
-  for (int a = 0; a < 3; ++a) c.sigma_deg[a] = std::sqrt(std::max(0.0, covariance(a, a))) / kDeg;
+  for (int a = 0; a < 3; ++a) c.sigma_deg[a] = std::sqrt(std::max(0.0, covariance(a, a))) * kDegPerRad;
   return c;
 }
 
@@ -334,10 +334,11 @@ ExtrinsicCorrection EstimateExtrinsicCorrection(const std::vector<cv::Mat>& fram
   if (c.rotation_deg.allFinite() && c.rotation_deg.norm() <= o.max_correction_deg) {
     const ExtrinsicCorrection second = EstimateOnce(grey, poses, CorrectedCamera(camera, c), region, valid, o);
     if (second.reason.empty()) {
-      const Eigen::AngleAxisd total(RotationFromVector(second.rotation_deg * kDeg) * RotationFromVector(c.rotation_deg * kDeg));
+      const Eigen::AngleAxisd total(RotationFromVector(second.rotation_deg * kRadPerDeg) *
+                                    RotationFromVector(c.rotation_deg * kRadPerDeg));
       const double before = c.rms_before_px;
       c = second;
-      c.rotation_deg = total.axis() * total.angle() / kDeg;
+      c.rotation_deg = total.axis() * total.angle() * kDegPerRad;
       c.rms_before_px = before;
     }
   }
@@ -359,7 +360,8 @@ ExtrinsicCorrection EstimateExtrinsicCorrection(const std::vector<cv::Mat>& fram
 
 RigCamera CorrectedCamera(const RigCamera& camera, const ExtrinsicCorrection& correction) {
   RigCamera corrected = camera;
-  corrected.vehicle_from_camera.R = RotationFromVector(correction.rotation_deg * kDeg) * camera.vehicle_from_camera.R;
+  corrected.vehicle_from_camera.R =
+      RotationFromVector(correction.rotation_deg * kRadPerDeg) * camera.vehicle_from_camera.R;
   return corrected;
 }
 

@@ -8,11 +8,10 @@
 #include <stdexcept>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 void Require(bool ok, const std::string& field, double value, const std::string& constraint) {
   if (!ok) {

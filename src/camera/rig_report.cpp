@@ -9,12 +9,10 @@
 
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = 180.0 / kPi;
 
 const cv::Scalar kLaneOverlayColour(255, 0, 255);  // magenta (BGR)
 const cv::Scalar kCameraColours[] = {{60, 60, 230}, {230, 120, 40}, {60, 200, 60}, {200, 60, 200}, {40, 200, 220}, {150, 150, 150}};
@@ -81,8 +79,8 @@ std::string RigSummary(const Rig& rig, double range_m) {
   for (const RigCamera& c : rig.cameras) {
     const Sight sight(c);
     const Eigen::Vector3d t = c.vehicle_from_camera.t, axis = c.vehicle_from_camera.R.col(2);
-    const double azimuth = std::atan2(axis.x(), axis.z()) * kDeg;
-    const double elevation = -std::asin(std::max(-1.0, std::min(1.0, axis.y()))) * kDeg;
+    const double azimuth = std::atan2(axis.x(), axis.z()) * kDegPerRad;
+    const double elevation = -std::asin(std::max(-1.0, std::min(1.0, axis.y()))) * kDegPerRad;
     // The share of the road within range_m (outside the car) that the camera sees, on a 10 cm grid.
     int road = 0, seen = 0;
     for (double x = -range_m; x <= range_m; x += 0.1) {
@@ -95,8 +93,8 @@ std::string RigSummary(const Rig& rig, double range_m) {
     }
     out.precision(1);
     out << c.name << ": " << ModelName(c.model.type()) << " " << c.model.width() << "x" << c.model.height()
-        << ", field to " << c.model.max_theta_rad() * kDeg << " deg from the axis, at (" << t.x() << ", " << t.y() << ", "
-        << t.z() << ") m (" << -t.y() << " m above the road), axis azimuth " << azimuth << " deg (+ = right), elevation "
+        << ", field to " << c.model.max_theta_rad() * kDegPerRad << " deg from the axis, at (" << t.x() << ", " << t.y()
+        << ", " << t.z() << ") m (" << -t.y() << " m above the road), axis azimuth " << azimuth << " deg (+ = right), elevation "
         << elevation << " deg; sees " << 100.0 * seen / std::max(road, 1) << " % of the road within " << range_m << " m\n";
   }
   return out.str();

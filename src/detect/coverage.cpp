@@ -2,12 +2,9 @@
 
 #include <cmath>
 
+#include "dps/util/math.h"
+
 namespace dps {
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-}  // namespace
 
 Eigen::Vector2d Sector::Vertex() const {
   return apex + start_m * Eigen::Vector2d(std::sin(direction_rad), std::cos(direction_rad));

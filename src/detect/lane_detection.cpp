@@ -11,11 +11,10 @@
 #include "dps/camera/box.h"
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
-
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 // A line found in the bird's-eye view: x = offset + slope z (vehicle frame, metres).
 struct Line {
@@ -169,7 +168,7 @@ LaneDetector::LaneDetector(const Rig& rig, const LaneDetectorOptions& options) :
   valid_ = use_[0] | use_[1];
   for (int i = 0; i < 2; ++i) used_[i] = cv::boundingRect(use_[i]);
   const int slopes = 2 * static_cast<int>(std::ceil(o.max_heading_deg / 2.0)) + 1;
-  for (int k = 0; k < slopes; ++k) slopes_.push_back(std::tan((k - slopes / 2) * 2.0 * kDeg));
+  for (int k = 0; k < slopes; ++k) slopes_.push_back(std::tan((k - slopes / 2) * 2.0 * kRadPerDeg));
   // x = -lateral + (c + 0.5) cell meets offset cell floor((x - slope z + lateral) / cell).
   shift_.resize(static_cast<size_t>(height_) * slopes);
   for (int r = 0; r < height_; ++r) {
@@ -283,7 +282,7 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
   }
   const std::pair<const char*, const LaneLine*> named[] = {{"left2", left2}, {"left", left}, {"right", right}, {"right2", right2}};
   for (const auto& [name, l] : named) {
-    if (l) out.boundaries.push_back({0, 0.0, name, l->offset_m, std::atan(l->slope) / kDeg, 0.0, l->type, l->confidence});
+    if (l) out.boundaries.push_back({0, 0.0, name, l->offset_m, std::atan(l->slope) * kDegPerRad, 0.0, l->type, l->confidence});
   }
   // A lane wider than two of the narrowest is two lanes with the line between them missed; one
   // narrower than the narrowest is no lane (a line that is not a boundary, e.g. an edge on the
@@ -294,7 +293,7 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
     out.has_ego = true;
     out.ego.lp_m = -(left->offset_m + right->offset_m) / 2;
     out.ego.lane_width_m = (right->offset_m - left->offset_m) * std::cos(heading);
-    out.ego.heading_deg = -heading / kDeg;
+    out.ego.heading_deg = -heading * kDegPerRad;
     if (*previous_lp && std::abs(out.ego.lp_m - **previous_lp) > out.ego.lane_width_m / 2) {
       out.ego.event = out.ego.lp_m > **previous_lp ? "left" : "right";
     }

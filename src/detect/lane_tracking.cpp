@@ -6,11 +6,10 @@
 #include <Eigen/LU>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
-
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 // A line x = offset + slope z of the previous vehicle frame in the current one: two of its points
 // (z = 0 and 10 m) moved into the current frame, the line through them.
@@ -45,10 +44,10 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
   const double dt = last_t_s_ ? std::max(0.0, t_s - *last_t_s_) : 0.0;
   last_t_s_ = t_s;
   // Predict: carried by the motion, with the drift the motion does not explain.
-  const double slope_sigma = std::tan(o.heading_sigma_deg * kDeg);
+  const double slope_sigma = std::tan(o.heading_sigma_deg * kRadPerDeg);
   Eigen::Matrix2d Q = Eigen::Matrix2d::Zero();
   Q(0, 0) = std::pow(o.offset_drift_mps * dt, 2);
-  Q(1, 1) = std::pow(std::tan(o.heading_drift_dps * kDeg) * dt, 2);
+  Q(1, 1) = std::pow(std::tan(o.heading_drift_dps * kRadPerDeg) * dt, 2);
   for (Track& t : tracks_) {
     if (current_in_previous) {
       const Eigen::Vector2d x = Carried(t.x, *current_in_previous);
@@ -92,7 +91,7 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
     track_used[p.track] = measurement_used[p.measurement] = true;
     Track& t = tracks_[p.track];
     const LaneBoundaryRow& b = m[p.measurement];
-    const Eigen::Vector2d z(b.offset_m, std::tan(b.heading_deg * kDeg));
+    const Eigen::Vector2d z(b.offset_m, std::tan(b.heading_deg * kRadPerDeg));
     const Eigen::Matrix2d K = t.P * (t.P + R).inverse();
     t.x += K * (z - t.x);
     t.P = (Eigen::Matrix2d::Identity() - K) * t.P;
@@ -105,7 +104,7 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
   for (size_t j = 0; j < m.size(); ++j) {
     if (measurement_used[j] || near_a_line[j]) continue;
     Track t;
-    t.x = Eigen::Vector2d(m[j].offset_m, std::tan(m[j].heading_deg * kDeg));
+    t.x = Eigen::Vector2d(m[j].offset_m, std::tan(m[j].heading_deg * kRadPerDeg));
     t.P = R;
     t.last_measured_s = t_s;
     t.measurements = 1;

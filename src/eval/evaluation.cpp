@@ -3,6 +3,7 @@
 #include "dps/detect/object_attributes.h"
 #include "dps/map/tracker.h"
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,12 +14,6 @@
 
 namespace dps {
 namespace {
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
-}
 
 std::string Number(double v, int digits = 3) {
   if (std::isnan(v)) return "null";

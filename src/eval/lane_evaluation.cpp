@@ -9,17 +9,12 @@
 #include <utility>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
 
 const char* const kBoundaries[] = {"left2", "left", "right", "right2"};
-
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
-}
 
 std::string Number(double v, const char* format) {
   if (!std::isfinite(v)) return "null";

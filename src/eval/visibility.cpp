@@ -7,11 +7,10 @@
 #include "dps/camera/box.h"
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // An oriented box standing on the road: centre, unit axes (width, down, length) and half sizes.
 struct Box {

@@ -12,11 +12,11 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // The map's colours for the grid (BGR): occupied cells grey, free ones light green.
 
 constexpr int kShift = 4;  // fillPoly's fractional bits

@@ -1,11 +1,11 @@
 #include "dps/synth/lane_truth.h"
 
+#include "dps/util/math.h"
+
 #include <cmath>
 
 namespace dps {
 namespace {
-
-constexpr double kDeg = 180.0 / 3.14159265358979323846;
 
 // Where the world line x = line_x crosses the vehicle's X axis (lateral offset, vehicle frame).
 double OffsetAtVehicle(const PlanarPose& ego, double line_x) {
@@ -34,7 +34,7 @@ LaneTruth LaneTruthOf(const Scene& scene) {
       had_lane = false;  // off the road: no ego lane
       continue;
     }
-    const double heading = -ego.heading_rad * kDeg;  // the lines' direction seen from the vehicle
+    const double heading = -ego.heading_rad * kDegPerRad;  // the lines' direction seen from the vehicle
     const char* names[] = {"left2", "left", "right", "right2"};
     for (int i = 0; i < 4; ++i) {
       const int k = lane + i - 1;  // left2: lane - 1, left: lane, right: lane + 1, right2: lane + 2
@@ -43,7 +43,7 @@ LaneTruth LaneTruthOf(const Scene& scene) {
       out.boundaries.push_back({f, t, names[i], OffsetAtVehicle(ego, line_x(k)), heading, 0.0, solid ? "solid" : "dashed", 1.0});
     }
     const double left = OffsetAtVehicle(ego, line_x(lane)), right = OffsetAtVehicle(ego, line_x(lane + 1));
-    EgoLaneRow e{f, t, -(left + right) / 2, r.lane_width_m, ego.heading_rad * kDeg, ""};
+    EgoLaneRow e{f, t, -(left + right) / 2, r.lane_width_m, ego.heading_rad * kDegPerRad, ""};
     if (had_lane && lane != previous_lane) e.event = lane < previous_lane ? "left" : "right";
     out.ego.push_back(e);
     previous_lane = lane;

@@ -7,13 +7,11 @@
 #include <Eigen/Geometry>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 #include "util/yaml_fields.h"
 
 namespace dps {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
 
 // splitmix64: the same numbers on every platform (std's distributions are not).
 class Draws {
@@ -39,7 +37,7 @@ class Draws {
     const double z = Uniform(-1.0, 1.0), phi = Uniform(0.0, 2 * kPi);
     const double r = std::sqrt(std::max(0.0, 1 - z * z));
     const double angle = Uniform(0.0, max_rad);
-    out_->draws.emplace_back(name, angle / kDeg);
+    out_->draws.emplace_back(name, angle * kDegPerRad);
     return AxisAngle(Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z), angle);
   }
 
@@ -69,14 +67,14 @@ CameraModel DrawModel(const std::string& family, int w, int h, const RandomizeOp
   if (family == "fisheye_side") {
     // A lens of 190-200 degrees whose image circle may be cut by the image's top and bottom.
     const std::array<double, 4> k{d->Uniform(-0.02, 0.02, name + ".k1"), d->Uniform(-0.002, 0.002, name + ".k2"), 0, 0};
-    const double half_fov = d->Uniform(95.0, 100.0, name + ".half_fov_deg") * kDeg;
+    const double half_fov = d->Uniform(95.0, 100.0, name + ".half_fov_deg") * kRadPerDeg;
     const double rim = d->Uniform(0.95, 1.25, name + ".circle_fraction") * h / 2.0;
     K(0, 0) = rim / FisheyeRadius(k, half_fov);
     K(1, 1) = K(0, 0) * aspect;
     return CameraModel::Fisheye(w, h, K, k, rim);
   }
   // Axis down: the field ends field_edge degrees above the horizon, at the image circle.
-  const double edge = d->Uniform(o.field_edge_min_deg, o.field_edge_max_deg, name + ".field_edge_deg") * kDeg;
+  const double edge = d->Uniform(o.field_edge_min_deg, o.field_edge_max_deg, name + ".field_edge_deg") * kRadPerDeg;
   const double theta = kPi / 2 + edge;
   const double rim = d->Uniform(0.88, 0.98, name + ".circle_fraction") * std::min(w, h) / 2.0;
   if (family == "fisheye_down") {
@@ -127,9 +125,9 @@ void DrawRig(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
     c.model = DrawModel(r->camera_family, c.model.width(), c.model.height(), o, name, d);
     const double tilt =
         d->Uniform(o.side_fisheye_tilt_min_deg, o.side_fisheye_tilt_max_deg,
-                   r->camera_family == "fisheye_side" ? name + ".tilt_deg" : "") * kDeg;
+                   r->camera_family == "fisheye_side" ? name + ".tilt_deg" : "") * kRadPerDeg;
     c.vehicle_from_camera.R =
-        d->Rotation(o.mount_rotation_max_deg * kDeg, name + ".mount_rotation_deg") * NominalRotation(r->camera_family, left, tilt);
+        d->Rotation(o.mount_rotation_max_deg * kRadPerDeg, name + ".mount_rotation_deg") * NominalRotation(r->camera_family, left, tilt);
     const double out = rig.vehicle.width_m / 2 + d->Uniform(0.05, 0.25, name + ".outside_m");
     c.vehicle_from_camera.t = Eigen::Vector3d(left ? -out : out, -d->Uniform(o.height_min_m, o.height_max_m, name + ".height_m"),
                                               d->Uniform(0.5, 1.3, name + ".forward_m"));
@@ -137,7 +135,7 @@ void DrawRig(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
   r->processing_rig = rig;
   for (RigCamera& c : r->processing_rig.cameras) {
     c.vehicle_from_camera.R =
-        d->Rotation(o.calibration_error_max_deg * kDeg, c.name + ".calibration_error_deg") * c.vehicle_from_camera.R;
+        d->Rotation(o.calibration_error_max_deg * kRadPerDeg, c.name + ".calibration_error_deg") * c.vehicle_from_camera.R;
   }
 }
 

@@ -5,14 +5,13 @@
 #include <set>
 
 #include "dps/camera/rig_io.h"
+#include "dps/util/math.h"
 #include "util/yaml_fields.h"
 
 namespace dps {
 namespace {
 
 using internal::FieldReader;
-
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 double Positive(const FieldReader& f, const std::string& key, double fallback) {
   const double v = f.NumberOr(key, fallback);
@@ -35,10 +34,10 @@ MotionProfile ReadMotion(const FieldReader& f, const std::string& key) {
     int i = 0;
     for (const cv::FileNode& item : list) {
       const FieldReader k = f.Child(item, Str(key, "[", i++, "]"));
-      samples.push_back({k.Number("t"), k.Number("speed"), k.NumberOr("yaw_rate_deg", 0.0) * kDegToRad});
+      samples.push_back({k.Number("t"), k.Number("speed"), k.NumberOr("yaw_rate_deg", 0.0) * kRadPerDeg});
     }
   } else {
-    samples.push_back({0.0, f.NumberOr("speed", 0.0), f.NumberOr("yaw_rate_deg", 0.0) * kDegToRad});
+    samples.push_back({0.0, f.NumberOr("speed", 0.0), f.NumberOr("yaw_rate_deg", 0.0) * kRadPerDeg});
   }
   try {
     return MotionProfile(samples);
@@ -70,7 +69,7 @@ SceneObject ReadObject(const FieldReader& f) {
   o.height_m = Positive(f, "height", d->height);
   o.start.x_m = f.Number("x");
   o.start.z_m = f.Number("z");
-  o.start.heading_rad = f.NumberOr("heading_deg", 0.0) * kDegToRad;
+  o.start.heading_rad = f.NumberOr("heading_deg", 0.0) * kRadPerDeg;
   o.motion = ReadMotion(f, "motion");
   o.brightness = f.NumberOr("brightness", d->brightness);
   if (!(o.brightness > 0.0 && o.brightness <= 1.0)) f.Fail("brightness", "expected a value in (0, 1]");
