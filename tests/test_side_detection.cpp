@@ -204,8 +204,8 @@ void TestStandingSlowBeyondVerge() {
   CHECK(x.size() >= 20);
   if (x.size() < 20) return;
   // Half its points within the scoring's tolerance of the face (DESIGN.md §5: 0.75 m at this range;
-  // placed by the foot alone, 1.0 m short). Still short by 0.6 m, its nearest tenth by 1.4 m
-  // (docs/experiments/detection-history.md).
+  // 1.0 m short with the contact's sigma from its row alone). Still short by 0.6 m, its nearest
+  // tenth by 1.4 m (docs/experiments/detection-history.md).
   CHECK_NEAR(x[x.size() / 2], face, 0.75);
 }
 
