@@ -14,6 +14,7 @@
 #include "dps/stereo/virtual_view.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/image.h"
+#include "dps/util/math.h"
 
 namespace {
 
@@ -253,9 +254,9 @@ int View(const dps_cli::Args& args, const dps::Rig& rig) {
   const dps::RigCamera& c = rig.Camera(args.Get("camera"));
   const cv::Mat image = ReadImage(args, args.Get("image"), c.model);
   const cv::Size size = args.Size("size", cv::Size(640, 480));
-  const double fov = args.Number("fov-deg", 90.0) * M_PI / 180.0;
-  if (!(fov > 0.0 && fov < M_PI * 0.99)) throw dps::Error("option --fov-deg: expected between 0 and 178 degrees");
-  const double yaw = args.Number("yaw-deg", 0.0) * M_PI / 180.0, pitch = args.Number("pitch-deg", 0.0) * M_PI / 180.0;
+  const double fov = args.Number("fov-deg", 90.0) * dps::kRadPerDeg;
+  if (!(fov > 0.0 && fov < dps::kPi * 0.99)) throw dps::Error("option --fov-deg: expected between 0 and 178 degrees");
+  const double yaw = args.Number("yaw-deg", 0.0) * dps::kRadPerDeg, pitch = args.Number("pitch-deg", 0.0) * dps::kRadPerDeg;
   dps::ViewSpec spec;
   spec.width = size.width;
   spec.height = size.height;

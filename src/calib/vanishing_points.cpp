@@ -10,11 +10,10 @@
 #include <Eigen/SVD>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
-
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 
 int AxisIndex(char axis) { return axis == 'X' ? 0 : axis == 'Y' ? 1 : 2; }
 
@@ -76,7 +75,7 @@ std::vector<LineFit> FitLines(const MarkedRays& marked, const CameraModel& model
     fit.points = static_cast<int>(r.size());
     double rms = 0.0;
     fit.normal = FitGreatCircle(r, &rms);
-    fit.rms_deg = rms * kRadToDeg;
+    fit.rms_deg = rms * kDegPerRad;
     double scale = 0.0;
     for (const Eigen::Vector3d& p : r) scale += PixelsPerRadian(model, p, (fit.normal - fit.normal.dot(p) * p).normalized());
     fit.rms_px = rms * scale / r.size();
@@ -140,7 +139,7 @@ AxisRows FitAxes(const std::vector<LineFit>& lines, const Eigen::Matrix3d& nomin
     a.direction = m;
     double ss = 0.0;
     for (const Eigen::Vector3d& l : normals) ss += std::pow(std::asin(std::min(1.0, std::abs(l.dot(m)))), 2);
-    a.spread_deg = std::sqrt(ss / normals.size()) * kRadToDeg;
+    a.spread_deg = std::sqrt(ss / normals.size()) * kDegPerRad;
     axes->push_back(a);
     rows.row[k] = m;
     rows.have[k] = true;
@@ -219,7 +218,7 @@ CameraCalibration CalibrateCamera(const std::string& camera, const CameraModel& 
   for (int k = 0; k < 3; ++k) out.R_before_fix.row(k) = full[k].transpose();
   for (int i = 0; i < 3; ++i) {
     for (int j = i + 1; j < 3; ++j) {
-      const double angle = std::acos(std::clamp(full[i].dot(full[j]), -1.0, 1.0)) * kRadToDeg;
+      const double angle = std::acos(std::clamp(full[i].dot(full[j]), -1.0, 1.0)) * kDegPerRad;
       out.orthogonality_error_deg = std::max(out.orthogonality_error_deg, std::abs(angle - 90.0));
     }
   }

@@ -7,6 +7,7 @@
 #include <Eigen/LU>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 
@@ -60,7 +61,7 @@ double RotationAngleDeg(const Eigen::Matrix3d& A, const Eigen::Matrix3d& B) {
   // acos loses precision near 0; use the sine from the skew part as well.
   const double s = 0.5 * Eigen::Vector3d(D(2, 1) - D(1, 2), D(0, 2) - D(2, 0), D(1, 0) - D(0, 1))
                              .norm();
-  return std::atan2(s, c) * 180.0 / 3.14159265358979323846;
+  return std::atan2(s, c) * kDegPerRad;
 }
 
 bool RayMeetsRoad(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, Eigen::Vector3d* ground) {

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 namespace dps {
 
@@ -74,7 +75,7 @@ std::optional<int> LaneOfPoint(const std::vector<LaneBoundaryRow>& boundaries, c
   if (!left || !right) return std::nullopt;
   const double z = point.y();
   const auto at = [z](const LaneBoundaryRow& b) {
-    return b.offset_m + std::tan(b.heading_deg * M_PI / 180.0) * z + 0.5 * b.curvature * z * z;
+    return b.offset_m + std::tan(b.heading_deg * kRadPerDeg) * z + 0.5 * b.curvature * z * z;
   };
   const double l = at(*left), r = at(*right), width = r - l, x = point.x();
   if (!(width > 0)) return std::nullopt;

@@ -10,6 +10,7 @@
 #include "dps/detect/ground_projection.h"
 #include "dps/util/error.h"
 #include "dps/util/image.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
@@ -304,7 +305,7 @@ std::pair<int, double> SideViewColumns(const SideDetectorOptions& o, double scal
   const int width = static_cast<int>(std::lround(o.view_width * scale));
   if (o.back_half_angle_deg <= 0.0) return {width, 0.5};
   const double front = (width - 1) / 2.0;
-  const double back = o.focal_px * scale * std::tan(o.back_half_angle_deg * 3.14159265358979323846 / 180.0);
+  const double back = o.focal_px * scale * std::tan(o.back_half_angle_deg * kRadPerDeg);
   const int total = static_cast<int>(std::lround(front + back)) + 1;
   return {total, (total - 1 - front) / (total - 1)};
 }

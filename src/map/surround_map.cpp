@@ -1,6 +1,7 @@
 #include "dps/map/surround_map.h"
 
 #include "dps/util/error.h"
+#include "dps/util/math.h"
 
 #include <cmath>
 #include <cstdio>
@@ -164,7 +165,7 @@ cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>&
 void DrawLanes(cv::Mat& map, const std::vector<LaneBoundaryRow>& lanes, const MapOptions& o) {
   const MapProjection to_px(o);
   for (const LaneBoundaryRow& b : lanes) {
-    const double slope = std::tan(b.heading_deg * 3.14159265358979323846 / 180.0);
+    const double slope = std::tan(b.heading_deg * kRadPerDeg);
     const int thickness = b.boundary == "left" || b.boundary == "right" ? 2 : 1;
     // Dashes of 3 m every 9 m for dashed lines, one segment for solid ones.
     const double step = b.type == "dashed" ? 9.0 : 2 * o.range_m, length = b.type == "dashed" ? 3.0 : 2 * o.range_m;
@@ -191,7 +192,7 @@ void DrawTracks(cv::Mat& map, const std::vector<TrackState>& tracks, const MapOp
     // The prediction's 1-sigma ellipse (map y points against z).
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(t.predicted_cov);
     const Eigen::Vector2d axis = eig.eigenvectors().col(1);
-    const double angle = std::atan2(-axis.y(), axis.x()) * 180.0 / 3.14159265358979323846;
+    const double angle = std::atan2(-axis.y(), axis.x()) * kDegPerRad;
     const cv::Size axes(std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(1))) * to_px.scale)),
                         std::max(1, cvRound(std::sqrt(std::max(0.0, eig.eigenvalues()(0))) * to_px.scale)));
     cv::ellipse(map, ahead, axes, angle, 0, 360, cv::Scalar(200, 120, 0), 1, cv::LINE_AA);

@@ -17,6 +17,7 @@
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
 #include "dps/util/lanes_csv.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
@@ -517,7 +518,7 @@ void DriveRun::WriteGrid(int f) {
   }
   grid_index_ << in_.ids[f] << ',' << Str(in_.times[f]) << ",grid/" << name << ',' << Str(grid_.origin().x()) << ','
               << Str(grid_.origin().y()) << ',' << Str(ego_.x_m) << ',' << Str(ego_.z_m) << ','
-              << Str(ego_.heading_rad * 180.0 / 3.14159265358979323846) << '\n';
+              << Str(ego_.heading_rad * kDegPerRad) << '\n';
 }
 
 // Decoding: frame f + 1's two images are read alongside frame f's stereo, each by its own task

@@ -18,13 +18,13 @@
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
 #include "dps/util/image.h"
+#include "dps/util/math.h"
 
 namespace dps {
 namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 constexpr double kCanRateHz = 100.0;
 
 // A deterministic stream of uniform and Gaussian numbers (splitmix64), the same on every
@@ -152,9 +152,9 @@ std::vector<TruthRow> TruthAt(const FrameState& state, int frame) {
     const Eigen::Vector2d v_world(speed * std::sin(b.world.heading_rad),
                                   speed * std::cos(b.world.heading_rad));
     const Eigen::Vector2d v = WorldToBodyDirection(state.ego, v_world);
-    double heading = std::remainder(b.heading_rad, 2.0 * 3.14159265358979323846);
+    double heading = std::remainder(b.heading_rad, 2.0 * kPi);
     rows.push_back({frame, state.t_s, o.id, o.kind, b.centre_xz.x(), b.centre_xz.y(),
-                    heading * kRadToDeg, o.length_m, o.width_m, o.height_m, v.x(), v.y()});
+                    heading * kDegPerRad, o.length_m, o.width_m, o.height_m, v.x(), v.y()});
   }
   return rows;
 }
@@ -168,7 +168,7 @@ Rig PerturbedRig(const Scene& scene) {
     const double z = 2.0 * rng.Uniform() - 1.0, phi = 6.28318530717958647692 * rng.Uniform();
     const Eigen::Vector3d axis(std::sqrt(1 - z * z) * std::cos(phi), std::sqrt(1 - z * z) * std::sin(phi), z);
     const double angle_deg = c.min_rotation_deg + (c.max_rotation_deg - c.min_rotation_deg) * rng.Uniform();
-    cam.vehicle_from_camera.R = cam.vehicle_from_camera.R * AxisAngle(axis, angle_deg / kRadToDeg);
+    cam.vehicle_from_camera.R = cam.vehicle_from_camera.R * AxisAngle(axis, angle_deg * kRadPerDeg);
   }
   return rig;
 }

@@ -27,6 +27,7 @@
 #include <opencv2/core.hpp>
 
 #include "dps/camera/rig.h"
+#include "dps/util/math.h"
 
 namespace dps {
 
@@ -95,7 +96,7 @@ class VirtualView {
 
 // Side views of one camera for many yaws, built on demand and kept for the most recent
 // `capacity` quantised yaws (a steady turn reuses its tables frame after frame).
-constexpr double kSideViewYawStepRad = 0.25 * 3.14159265358979323846 / 180.0;  // 0.25 degrees
+constexpr double kSideViewYawStepRad = 0.25 * kRadPerDeg;  // 0.25 degrees
 
 class SideViewCache {
  public:
