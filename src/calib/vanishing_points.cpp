@@ -153,11 +153,19 @@ AxisRows FitAxes(const std::vector<LineFit>& lines, const Eigen::Matrix3d& nomin
 
 }  // namespace
 
+namespace {
+// The left singular vectors of a 3 x N matrix whose columns are `v` are those of its 3 x 3 scatter
+// matrix sum v v^T, whose singular values are the matrix's squared: the same SVD on a fixed-size
+// matrix (a dynamic-size JacobiSVD costs this file most of its compile time).
+Eigen::JacobiSVD<Eigen::Matrix3d> ScatterSvd(const std::vector<Eigen::Vector3d>& v) {
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& x : v) scatter.noalias() += x * x.transpose();
+  return Eigen::JacobiSVD<Eigen::Matrix3d>(scatter, Eigen::ComputeFullU);
+}
+}  // namespace
+
 Eigen::Vector3d FitGreatCircle(const std::vector<Eigen::Vector3d>& rays, double* rms_rad) {
-  Eigen::Matrix3Xd L(3, rays.size());
-  for (size_t i = 0; i < rays.size(); ++i) L.col(i) = rays[i];
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(L, Eigen::ComputeFullU);
-  const Eigen::Vector3d l = svd.matrixU().col(2);  // smallest singular value (eq. 9)
+  const Eigen::Vector3d l = ScatterSvd(rays).matrixU().col(2);  // smallest singular value (eq. 9)
   if (rms_rad) {
     double ss = 0.0;
     for (const Eigen::Vector3d& p : rays) ss += std::pow(std::asin(std::min(1.0, std::abs(l.dot(p)))), 2);
@@ -168,13 +176,8 @@ Eigen::Vector3d FitGreatCircle(const std::vector<Eigen::Vector3d>& rays, double*
 
 Eigen::Vector3d VanishingDirection(const std::vector<Eigen::Vector3d>& normals,
                                    Eigen::Vector3d* singular_values) {
-  Eigen::Matrix3Xd M(3, normals.size());
-  for (size_t i = 0; i < normals.size(); ++i) M.col(i) = normals[i];
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(M, Eigen::ComputeFullU);
-  if (singular_values) {
-    *singular_values = Eigen::Vector3d::Zero();
-    for (int i = 0; i < svd.singularValues().size(); ++i) (*singular_values)(i) = svd.singularValues()(i);
-  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd = ScatterSvd(normals);
+  if (singular_values) *singular_values = svd.singularValues().cwiseMax(0.0).cwiseSqrt();
   return svd.matrixU().col(2);  // eq. 10
 }
 

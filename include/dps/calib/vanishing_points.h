@@ -31,7 +31,8 @@ Eigen::Vector3d FitGreatCircle(const std::vector<Eigen::Vector3d>& rays, double*
 
 // The common direction of great circles with these normals (eq. 10): the unit m minimising
 // sum (m^T l_i)^2. `singular_values` (optional) receives the singular values of M, largest first
-// (a small second value means the circles are nearly the same: degenerate).
+// (a small second value means the circles are nearly the same: degenerate), each to within about
+// 1e-8 of the largest (they come from M M^T's, which are their squares).
 Eigen::Vector3d VanishingDirection(const std::vector<Eigen::Vector3d>& normals,
                                    Eigen::Vector3d* singular_values = nullptr);
 
