@@ -83,6 +83,8 @@ double SlabEntry(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen
       *axis = k;
     }
     t_far = std::min(t_far, t1);
+    // The interval only shrinks: once empty or behind the origin, it stays so.
+    if (t_near > t_far || t_far <= 1e-9) return std::numeric_limits<double>::infinity();
   }
   if (t_near > t_far || t_far <= 1e-9 || t_near <= 1e-9) return std::numeric_limits<double>::infinity();
   return t_near;
@@ -183,9 +185,24 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
     best_t = t_car;
     best.id = kIdOwnCar;
   }
+  const double dd = d.squaredNorm();
   for (size_t i = 0; i < st.boxes.size(); ++i) {
     const BoxInstance& b = st.boxes[i];
     const SceneObject& obj = *b.object;
+    // The box lies in the sphere through its corners: a ray that meets the sphere nowhere ahead of
+    // the origin, or only beyond the nearest hit so far, cannot hit the box first (the sphere a
+    // little larger than exact, so that rounding never drops a box that would be hit).
+    {
+      const Eigen::Vector3d oc(b.centre_xz.x() - o.x(), -obj.height_m / 2 - o.y(), b.centre_xz.y() - o.z());
+      const double r = 0.5 * std::sqrt(obj.width_m * obj.width_m + obj.height_m * obj.height_m + obj.length_m * obj.length_m) *
+                       (1.0 + 1e-9) + 1e-9;
+      const double along = oc.dot(d), outside = oc.squaredNorm() - r * r;
+      if (outside > 0.0) {  // the origin outside the sphere
+        const double disc = along * along - dd * outside;
+        if (along <= 0.0 || disc < 0.0) continue;                   // behind the origin, or missed
+        if ((along - std::sqrt(disc)) / dd > best_t) continue;      // entered beyond the nearest hit
+      }
+    }
     // Box coordinates: x across (right), y down, z along the heading; origin at the footprint
     // centre on the ground.
     const double c = std::cos(b.heading_rad), s = std::sin(b.heading_rad);
