@@ -122,6 +122,7 @@ SceneRenderer::SceneRenderer(const Scene& scene) : scene_(scene) {
     r.width = cam.model.width();
     r.height = cam.model.height();
     r.dirs.resize(static_cast<size_t>(r.width) * r.height * (samples_ + 1));
+    r.own_car_t.resize(r.dirs.size());
     const Eigen::Matrix3d R = cam.vehicle_from_camera.R;
     cv::parallel_for_(cv::Range(0, r.height), [&](const cv::Range& rows) {
       for (int v = rows.start; v < rows.end; ++v) {
@@ -139,6 +140,14 @@ SceneRenderer::SceneRenderer(const Scene& scene) : scene_(scene) {
             }
           }
         }
+      }
+    });
+    const Eigen::Vector3d origin = cam.vehicle_from_camera.t;
+    cv::parallel_for_(cv::Range(0, r.height), [&](const cv::Range& rows) {
+      const size_t per_row = static_cast<size_t>(r.width) * (samples_ + 1);
+      for (size_t i = rows.start * per_row; i < rows.end * per_row; ++i) {
+        const Eigen::Vector3d d = r.dirs[i].cast<double>();
+        r.own_car_t[i] = std::isnan(d.x()) ? std::numeric_limits<double>::infinity() : OwnCarEntry(origin, d);
       }
     });
     rays_.push_back(std::move(r));
@@ -164,6 +173,11 @@ FrameState SceneRenderer::StateAt(double t_s) const {
 
 RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
                            const Eigen::Vector3d& d) const {
+  return CastWithOwnCar(st, o, d, OwnCarEntry(o, d));
+}
+
+RayHit SceneRenderer::CastWithOwnCar(const FrameState& st, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                                     double t_car) const {
   RayHit best;
   double best_t = std::numeric_limits<double>::infinity();
   if (d.y() > 1e-12 && o.y() < 0.0) {  // the ground plane Y = 0 (Y points down)
@@ -180,7 +194,6 @@ RayHit SceneRenderer::Cast(const FrameState& st, const Eigen::Vector3d& o,
     }
   }
   // The own car, fixed in the vehicle frame.
-  const double t_car = OwnCarEntry(o, d);
   if (t_car < best_t) {
     best_t = t_car;
     best.id = kIdOwnCar;
@@ -498,12 +511,14 @@ RenderedView SceneRenderer::Render(const FrameState& st, size_t camera_index,
   cv::parallel_for_(cv::Range(0, r.height), [&](const cv::Range& rows) {
     for (int v = rows.start; v < rows.end; ++v) {
       for (int u = 0; u < r.width; ++u) {
-        const Eigen::Vector3f* dirs = &r.dirs[(static_cast<size_t>(v) * r.width + u) * (samples_ + 1)];
+        const size_t first = (static_cast<size_t>(v) * r.width + u) * (samples_ + 1);
+        const Eigen::Vector3f* dirs = &r.dirs[first];
+        const double* own_car_t = &r.own_car_t[first];
         cv::Vec3f colour(0, 0, 0);
         for (int s = 1; s <= samples_; ++s) {
           if (std::isnan(dirs[s].x())) continue;
           const Eigen::Vector3d d = dirs[s].cast<double>();
-          colour += Shade(st, d, Cast(st, origin, d), light);
+          colour += Shade(st, d, CastWithOwnCar(st, origin, d, own_car_t[s]), light);
         }
         // Sub-samples outside the rim count as black: the rim is anti-aliased too.
         out.image.at<cv::Vec3f>(v, u) = colour * (1.0f / samples_);
@@ -511,7 +526,7 @@ RenderedView SceneRenderer::Render(const FrameState& st, size_t camera_index,
           out.ids.at<std::uint16_t>(v, u) = kIdNoRay;
           out.range_m.at<float>(v, u) = 0.0f;
         } else {
-          const RayHit hit = Cast(st, origin, dirs[0].cast<double>());
+          const RayHit hit = CastWithOwnCar(st, origin, dirs[0].cast<double>(), own_car_t[0]);
           out.ids.at<std::uint16_t>(v, u) = hit.id;
           out.range_m.at<float>(v, u) = static_cast<float>(hit.distance_m);
         }

@@ -91,6 +91,9 @@ class SceneRenderer {
   bool OnVerge(double world_x) const;
   // The first entry of a ray into the own car's boxes (+inf: none).
   double OwnCarEntry(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
+  // Cast with the own car's entry along the ray given (OwnCarEntry(o, d)): the own car is fixed
+  // in the vehicle frame, so a camera's rays enter it at the same distance in every frame.
+  RayHit CastWithOwnCar(const FrameState& st, const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t_car) const;
   // The first entry into a kerb and its pavement (+inf: none); `face` = entry axis (1: top).
   double KerbEntry(const FrameState& st, const Eigen::Vector3d& o, const Eigen::Vector3d& d, int* face) const;
   // Asphalt (with patches and cracks), a verge or pavement at a world point on the road's surface.
@@ -100,6 +103,7 @@ class SceneRenderer {
   struct CameraRays {
     int width = 0, height = 0;
     std::vector<Eigen::Vector3f> dirs;  // (samples + 1) per pixel; centre ray first; NaN = none
+    std::vector<double> own_car_t;      // each ray's OwnCarEntry from the camera
   };
   cv::Vec3f Shade(const FrameState& state, const Eigen::Vector3d& dir, const RayHit& hit,
                   const Eigen::Vector3d& light_vehicle) const;
