@@ -151,9 +151,6 @@ AxisRows FitAxes(const std::vector<LineFit>& lines, const Eigen::Matrix3d& nomin
   return rows;
 }
 
-}  // namespace
-
-namespace {
 // The left singular vectors of a 3 x N matrix whose columns are `v` are those of its 3 x 3 scatter
 // matrix sum v v^T, whose singular values are the matrix's squared: the same SVD on a fixed-size
 // matrix (a dynamic-size JacobiSVD costs this file most of its compile time).
@@ -162,6 +159,7 @@ Eigen::JacobiSVD<Eigen::Matrix3d> ScatterSvd(const std::vector<Eigen::Vector3d>&
   for (const Eigen::Vector3d& x : v) scatter.noalias() += x * x.transpose();
   return Eigen::JacobiSVD<Eigen::Matrix3d>(scatter, Eigen::ComputeFullU);
 }
+
 }  // namespace
 
 Eigen::Vector3d FitGreatCircle(const std::vector<Eigen::Vector3d>& rays, double* rms_rad) {
