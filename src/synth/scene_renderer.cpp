@@ -166,6 +166,8 @@ FrameState SceneRenderer::StateAt(double t_s) const {
     b.world = o.PoseAt(t_s);
     b.centre_xz = WorldToBody(st.ego, {b.world.x_m, b.world.z_m});
     b.heading_rad = b.world.heading_rad - st.ego.heading_rad;
+    b.bound_radius_m = 0.5 * std::sqrt(o.width_m * o.width_m + o.height_m * o.height_m + o.length_m * o.length_m) *
+                       (1.0 + 1e-9) + 1e-9;
     st.boxes.push_back(b);
   }
   return st;
@@ -202,13 +204,11 @@ RayHit SceneRenderer::CastWithOwnCar(const FrameState& st, const Eigen::Vector3d
   for (size_t i = 0; i < st.boxes.size(); ++i) {
     const BoxInstance& b = st.boxes[i];
     const SceneObject& obj = *b.object;
-    // The box lies in the sphere through its corners: a ray that meets the sphere nowhere ahead of
-    // the origin, or only beyond the nearest hit so far, cannot hit the box first (the sphere a
-    // little larger than exact, so that rounding never drops a box that would be hit).
+    // The box lies in its bounding sphere: a ray that meets the sphere nowhere ahead of the origin,
+    // or only beyond the nearest hit so far, cannot hit the box first.
     {
       const Eigen::Vector3d oc(b.centre_xz.x() - o.x(), -obj.height_m / 2 - o.y(), b.centre_xz.y() - o.z());
-      const double r = 0.5 * std::sqrt(obj.width_m * obj.width_m + obj.height_m * obj.height_m + obj.length_m * obj.length_m) *
-                       (1.0 + 1e-9) + 1e-9;
+      const double r = b.bound_radius_m;
       const double along = oc.dot(d), outside = oc.squaredNorm() - r * r;
       if (outside > 0.0) {  // the origin outside the sphere
         const double disc = along * along - dd * outside;

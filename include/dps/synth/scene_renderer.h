@@ -44,6 +44,10 @@ struct BoxInstance {
   Eigen::Vector2d centre_xz{0, 0};  // footprint centre, vehicle frame
   double heading_rad = 0.0;       // relative to the vehicle's +Z, positive towards +X
   PlanarPose world;               // the same in the world frame (texture coordinates)
+  // The radius of the sphere about the box's centre through its corners, a little larger than
+  // exact (so that rounding never makes a ray test miss the box): rays that miss it miss the box
+  // (StateAt fills it).
+  double bound_radius_m = 0.0;
 };
 
 // Where the world is at one instant, seen from the vehicle.
