@@ -57,6 +57,7 @@ void TestClasses() {
   CHECK_EQ(dps::ExpectedClass("bus"), std::string("truck"));
   CHECK_EQ(dps::ExpectedClass("pedestrian"), std::string("pedestrian"));
   CHECK_EQ(dps::ExpectedClass("wall"), std::string("unknown"));
+  CHECK_EQ(dps::ExpectedClass("motorbike"), std::string("pedestrian"));
 }
 
 void TestExtents() {
@@ -189,6 +190,13 @@ void TestScores() {
   CHECK_EQ(r.overall.matched_detections, 3);
   CHECK_EQ(r.classes.judged, 3);
   CHECK_EQ(r.classes.correct, 2);
+  // The confusion by the class expected: the pole taken for a pedestrian.
+  CHECK_EQ(r.class_confusion.at("pole").at("pedestrian"), 1);
+  CHECK_EQ(r.class_confusion.at("vehicle").at("vehicle"), 1);
+  CHECK(r.class_confusion.at("pole").count("pole") == 0);
+  CHECK(dps::EvaluationJson(r).find("\"class_confusion\": {\"pole\": {\"pedestrian\": 1}, \"truck\": {\"truck\": 1}, "
+                                    "\"vehicle\": {\"vehicle\": 1}}") != std::string::npos);
+  CHECK(dps::EvaluationTable(r).find("  pole: pedestrian 1\n") != std::string::npos);
   CHECK_EQ(r.lanes.judged, 3);
   CHECK_EQ(r.lanes.correct, 2);
   CHECK(dps::EvaluationJson(r).find("\"lanes\": {\"judged\": 3, \"correct\": 2") != std::string::npos);

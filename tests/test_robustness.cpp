@@ -39,10 +39,20 @@ void TestDraws() {
   CHECK(a.ToJson(1000) != dps::Randomize(scene, 1001).ToJson(1001));
   std::set<std::string> families;
   std::set<bool> mirrored;
+  std::set<std::string> kinds_drawn;
   for (std::uint64_t seed = 0; seed < 40; ++seed) {
     const dps::RandomizedScene r = dps::Randomize(scene, seed);
     families.insert(r.camera_family);
     mirrored.insert(r.mirrored);
+    // A story car drawn as another road vehicle carries that vehicle's truth kind (what dps-eval
+    // expects its class from): 0 car, 1 van (a car), 2 bus (truck), 3 motorbike.
+    for (const dps::SceneObject& obj : r.scene.objects) {
+      const double k = Draw(r, "object" + std::to_string(obj.id) + ".class");
+      if (std::isnan(k)) continue;
+      const char* expected = k == 2 ? "truck" : k == 3 ? "motorbike" : "car";
+      CHECK_EQ(obj.kind, std::string(expected));
+      if (k == 3) kinds_drawn.insert(obj.kind);
+    }
     for (const dps::RigCamera& c : r.scene.rig.cameras) {
       const dps::RigCamera& processed = r.processing_rig.Camera(c.name);
       CHECK(dps::RotationAngleDeg(processed.vehicle_from_camera.R, c.vehicle_from_camera.R) <=
@@ -71,6 +81,7 @@ void TestDraws() {
               mirrored.size() == 2 ? "yes" : "no");
   CHECK_EQ(families.size(), size_t{4});
   CHECK_EQ(mirrored.size(), size_t{2});
+  CHECK(kinds_drawn.count("motorbike") == 1);
   CHECK_THROWS_WITH((dps::Randomize(dps_test::SmallScene("calibration"), 1)), dps::Error, "drive scenes");
   // Every shipped drive scene is a battery family: it reads and randomises.
   int drive_scenes = 0;

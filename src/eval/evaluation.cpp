@@ -189,8 +189,10 @@ void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, Evaluatio
 void ScoreAttributes(const Detection& d, const TruthRow& object, const std::vector<LaneBoundaryRow>* lanes,
                      EvaluationResult* result) {
   if (!d.object_class.empty()) {
+    const std::string expected = ExpectedClass(object.kind);
     ++result->classes.judged;
-    result->classes.correct += d.object_class == ExpectedClass(object.kind);
+    result->classes.correct += d.object_class == expected;
+    ++result->class_confusion[expected][d.object_class];
   }
   const std::optional<int> lane = lanes ? LaneOfPoint(*lanes, {object.x_m, object.z_m}) : std::nullopt;
   if (lane) {
@@ -365,6 +367,11 @@ std::string EvaluationTable(const EvaluationResult& r) {
   if (r.classes.judged) {
     out << "class right for " << r.classes.correct << " of " << r.classes.judged << " matches ("
         << Number(r.classes.Accuracy()) << ")\n";
+    for (const auto& [expected, given] : r.class_confusion) {
+      out << "  " << expected << ":";
+      for (const auto& [c, n] : given) out << " " << c << " " << n;
+      out << "\n";
+    }
   }
   if (r.lanes.judged) {
     out << "lane right for " << r.lanes.correct << " of " << r.lanes.judged << " matches with a true lane ("
@@ -412,6 +419,19 @@ std::string EvaluationJson(const EvaluationResult& r) {
     out << ",\n  \"" << name << "\": {\"judged\": " << a->judged << ", \"correct\": " << a->correct
         << ", \"accuracy\": " << Number(a->Accuracy(), 4) << "}";
   }
+  out << ",\n  \"class_confusion\": {";
+  bool first = true;
+  for (const auto& [expected, given] : r.class_confusion) {
+    out << (first ? "" : ", ") << "\"" << expected << "\": {";
+    first = false;
+    bool first_given = true;
+    for (const auto& [c, n] : given) {
+      out << (first_given ? "" : ", ") << "\"" << c << "\": " << n;
+      first_given = false;
+    }
+    out << "}";
+  }
+  out << "}";
   out << "\n}\n";
   return out.str();
 }

@@ -174,7 +174,7 @@ void DrawVehicleClass(const std::string& name, SceneObject* obj, Draws* d) {
   static const Class classes[] = {{"car", 0.55, 4.5, 1.8, 1.5},
                                   {"car", 0.75, 5.2, 2.0, 2.2},
                                   {"truck", 0.85, 12.0, 2.5, 3.2},
-                                  {"car", 1.0, 2.1, 0.8, 1.4}};
+                                  {"motorbike", 1.0, 2.1, 0.8, 1.4}};
   int k = 0;
   while (u >= classes[k].upto && k < 3) ++k;
   d->Record(name + ".class", k);  // 0 car, 1 van, 2 bus, 3 motorbike

@@ -52,7 +52,7 @@ struct KindDefaults {
 };
 constexpr KindDefaults kKinds[] = {
     {"car", 4.5, 1.8, 1.5, 0.6},  {"truck", 10.0, 2.5, 3.5, 0.7}, {"pole", 0.2, 0.2, 3.0, 0.5},
-    {"wall", 10.0, 0.3, 2.0, 0.55}, {"pedestrian", 0.5, 0.6, 1.8, 0.45}};
+    {"wall", 10.0, 0.3, 2.0, 0.55}, {"pedestrian", 0.5, 0.6, 1.8, 0.45}, {"motorbike", 2.1, 0.8, 1.4, 0.6}};
 
 SceneObject ReadObject(const FieldReader& f) {
   SceneObject o;
@@ -61,7 +61,7 @@ SceneObject ReadObject(const FieldReader& f) {
   for (const KindDefaults& k : kKinds) {
     if (o.kind == k.kind) d = &k;
   }
-  if (!d) f.Fail("kind", "unknown kind '" + o.kind + "' (expected car, truck, pole, wall or pedestrian)");
+  if (!d) f.Fail("kind", "unknown kind '" + o.kind + "' (expected car, truck, motorbike, pole, wall or pedestrian)");
   o.id = f.Integer("id");
   if (o.id < 1) f.Fail("id", Str("= ", o.id, ": violated constraint >= 1"));
   o.length_m = Positive(f, "length", d->length);

@@ -459,7 +459,9 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
   const double detail = Fbm(a, h, 0.25, 3, oseed);
   const double fine = Fbm(a, h, 0.07, 2, oseed + 71);
   double tone = 0.75 + 0.6 * (detail - 0.5) + 0.35 * (fine - 0.5);
-  if (obj.kind == "car" || obj.kind == "truck") {
+  // A motorbike and its rider are one box drawn like a small car (tyres, a band of glass).
+  const bool car = obj.kind == "car" || obj.kind == "motorbike";
+  if (car || obj.kind == "truck") {
     const double frac = h / obj.height_m;
     if (hit.face != 2 && h < 0.35) {
       // Tyres and sills: darker than the body but with structure (tread, rims, dirt), as real
@@ -467,12 +469,12 @@ cv::Vec3f SceneRenderer::Shade(const FrameState& st, const Eigen::Vector3d& d, c
       const double tread = Fbm(a, h, 0.05, 2, oseed + 313);
       tone = 0.10 + 0.30 * detail + 0.35 * (tread - 0.5) * 2.0 * 0.5;
       base = cv::Vec3f::all(0.5f);
-    } else if (hit.face != 2 && obj.kind == "car" && frac > 0.6 && frac < 0.92) {
+    } else if (hit.face != 2 && car && frac > 0.6 && frac < 0.92) {
       tone = 0.35 + 0.4 * detail;  // windows
       base = cv::Vec3f(0.45f, 0.42f, 0.40f);
     } else if (obj.kind == "truck" && std::fmod(std::abs(a) + 10.0, 0.6) < 0.08) {
       tone *= 0.6;  // ribs of the box body
-    } else if (obj.kind == "car" && std::fmod(std::abs(a) + 10.0, 1.3) < 0.05) {
+    } else if (car && std::fmod(std::abs(a) + 10.0, 1.3) < 0.05) {
       tone *= 0.65;  // panel gaps
     }
   } else if (obj.kind == "pole") {

@@ -112,6 +112,8 @@ struct EvaluationResult {
   // ExpectedClass of the object's kind) and their lane (those whose object has a lane in
   // options.truth_lanes; right when the detection's lane is the object's).
   AttributeScore classes, lanes;
+  // The judged classes by the class expected: class_confusion[expected][given] matches.
+  std::map<std::string, std::map<std::string, int>> class_confusion;
 };
 
 // Throws dps::Error when results (frame, time pairs of detections or tracks, read from `results`)

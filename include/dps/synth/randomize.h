@@ -19,9 +19,9 @@
 //   whether the drive is written as video (MJPG or H.264) instead of PNG images;
 // - the own car as the cameras see it: bonnet and cabin height, the sill under the doors, a mirror
 //   housing behind each camera, paint;
-// - the objects: cars of the story may become vans, buses or motorbikes; sizes, paint brightness
-//   and colour, positions and speeds around the scene's own; up to three poles, walls or walking
-//   pedestrians beside the road (not on the empty roads);
+// - the objects: cars of the story may become vans (kind car), buses (truck) or motorbikes
+//   (motorbike); sizes, paint brightness and colour, positions and speeds around the scene's
+//   own; up to three poles, walls or walking pedestrians beside the road (not on the empty roads);
 //   and the whole story mirrored left to right (overtaking on either side, turns both ways).
 #pragma once
 

@@ -31,7 +31,7 @@ struct RoadMarkings {
 // A box-shaped object standing on the ground.
 struct SceneObject {
   int id = 1;                  // >= 1, unique; truth.csv's id
-  std::string kind = "car";    // car | truck | pole | wall | pedestrian (texture and truth kind)
+  std::string kind = "car";    // car | truck | motorbike | pole | wall | pedestrian (texture, truth kind)
   double length_m = 4.5;       // along its heading, > 0
   double width_m = 1.8;        // across, > 0
   double height_m = 1.5;       // > 0
