@@ -238,7 +238,8 @@ for size in sizes:
         print()
     print("Object attributes of the matched detections (object_attributes.h; pooled over the family's")
     print("drives): the class fitting the object's kind (car: vehicle, truck: truck, pedestrian: pedestrian,")
-    print("pole: pole, wall: unknown), the lane the object's (drives rendered with lane truth only):\n")
+    print("motorbike: pedestrian, pole: pole, wall: unknown), the lane the object's (drives rendered with")
+    print("lane truth only):\n")
     print("| family | class right | lane right |")
     print("| --- | --- | --- |")
     for family in families:
