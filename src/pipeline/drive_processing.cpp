@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <sstream>
 
@@ -13,6 +14,7 @@
 
 #include "dps/camera/rig_io.h"
 #include "dps/detect/detection_io.h"
+#include "dps/detect/object_attributes.h"
 #include "dps/map/tracks_io.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/error.h"
@@ -479,6 +481,20 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), in_.ids[f], in_.times[f],
                 out.detections.size());
   grid_.Update(ego_, out.coverage, out.detections);
+  if (o_.grid_obstacles) {
+    std::map<std::string, int> next_id;
+    for (const Detection& d : out.detections) next_id[d.source] = std::max(next_id[d.source], d.id + 1);
+    for (Detection& d : GridObstacles(grid_, ego_, out.coverage, out.detections,
+                                             {pipeline_options_.merge_distance_m, pipeline_options_.vehicle_length_m,
+                                              pipeline_options_.vehicle_width_m},
+                                             o_.grid_obstacle)) {
+      d.frame = in_.ids[f];
+      d.t_s = in_.times[f];
+      d.id = next_id[d.source]++;
+      SetAttributes(out.lanes.boundaries, pipeline_options_.classes, &d);
+      out.detections.push_back(std::move(d));
+    }
+  }
   if (o_.grid_every > 0 && f % o_.grid_every == 0) WriteGrid(f);
   if (pictures_.WantsMap()) {
     DrawFrameMap(map_background_, grid_, in_.rig.vehicle, out.detections, frame_tracks, o_.map, caption, map_);
@@ -629,6 +645,7 @@ void DriveOptions::Check() const {
   map.Check();
   tracker.Check();
   occupancy.Check();
+  grid_obstacle.Check();
   field_mask.Check();
   own_car_mask.Check();
 }

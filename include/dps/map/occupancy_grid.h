@@ -57,6 +57,9 @@ class OccupancyGrid {
   double At(const Eigen::Vector2d& world_xz) const;
   // The evidence at a point of the current vehicle frame.
   double AtVehicle(const Eigen::Vector2d& vehicle_xz) const;
+  // The evidence (CV_32F, cells x cells): cell (column c, row r) covers world x in origin.x +
+  // [c, c + 1) cell_m and z in origin.z + [r, r + 1) cell_m.
+  const cv::Mat& Evidence() const { return sum_; }
   // Obstacle cells (sum > strength_threshold) as world points.
   std::vector<Eigen::Vector2d> ObstacleCells() const;
 

@@ -9,6 +9,7 @@
 
 #include "dps/calib/extrinsic_correction.h"
 #include "dps/camera/valid_mask.h"
+#include "dps/map/grid_obstacles.h"
 #include "dps/map/occupancy_grid.h"
 #include "dps/map/surround_map.h"
 #include "dps/map/tracker.h"
@@ -31,6 +32,10 @@ struct DriveOptions {
   MapOptions map;
   TrackerOptions tracker;
   OccupancyOptions occupancy;
+  // Obstacles the grid remembers where no view looks this frame (behind the car, the wedges between
+  // the views) reported as detections (grid_obstacles.h; off by default: docs/detection.md).
+  bool grid_obstacles = false;
+  GridObstacleOptions grid_obstacle;
   bool truncate = false;          // left and right with different frames: keep the frame numbers both have
   // frames.csv with two consecutive frames more than max_frame_gap intervals (its median) apart -
   // a frame lost in recording - is an error naming them, unless allow_frame_gaps: then a warning,

@@ -1,0 +1,94 @@
+#include "dps/map/grid_obstacles.h"
+
+#include <cmath>
+#include <map>
+#include <utility>
+
+#include <opencv2/imgproc.hpp>
+
+#include "dps/util/error.h"
+
+namespace dps {
+
+void GridObstacleOptions::Check() const {
+  const OptionCheck Require("grid obstacles");
+  Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
+  Require(min_area_m2 >= 0, "min_area_m2", min_area_m2, ">= 0");
+}
+
+namespace {
+
+// Whether a remembered object and a detection of the frame are one object: they come within the
+// merge distance, or together fit into one vehicle's footprint (a parked car's part in view and its
+// remembered part behind the view's edge, the stretch between them unseen).
+bool OneObject(const Detection& remembered, const Detection& measured, const SameObject& same) {
+  std::vector<cv::Point2f> both;
+  for (const Detection* e : {&remembered, &measured}) {
+    for (const Eigen::Vector2d& p : e->points) both.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+  }
+  for (const Eigen::Vector2d& q : measured.points) {
+    for (const Eigen::Vector2d& p : remembered.points) {
+      if ((p - q).norm() <= same.merge_distance_m) return true;
+    }
+  }
+  if (same.vehicle_length_m <= 0 || both.empty()) return false;
+  const cv::RotatedRect box = cv::minAreaRect(both);
+  return std::max(box.size.width, box.size.height) <= same.vehicle_length_m &&
+         std::min(box.size.width, box.size.height) <= same.vehicle_width_m;
+}
+
+}  // namespace
+
+std::vector<Detection> GridObstacles(const OccupancyGrid& grid, const PlanarPose& world_from_vehicle,
+                                     const Coverage& coverage, const std::vector<Detection>& frame,
+                                     const SameObject& same, const GridObstacleOptions& o) {
+  o.Check();
+  const double cell = grid.options().cell_m;
+  // Objects are the 8-connected regions of occupied cells (evidence > 0: a wall whose evidence
+  // fell below the threshold in places stays one region); their obstacle cells (above the
+  // strength threshold) out of every view's sector and near enough are what is remembered.
+  const cv::Mat& evidence = grid.Evidence();
+  cv::Mat labels;
+  cv::connectedComponents(evidence > 0, labels, 8, CV_32S);
+  const float strong = static_cast<float>(grid.options().strength_threshold);
+  std::map<int, std::vector<Eigen::Vector2d>> groups;
+  for (int r = 0; r < evidence.rows; ++r) {
+    for (int c = 0; c < evidence.cols; ++c) {
+      if (evidence.at<float>(r, c) <= strong) continue;
+      const Eigen::Vector2d w = grid.origin() + Eigen::Vector2d(c + 0.5, r + 0.5) * cell;
+      const Eigen::Vector2d p = WorldToBody(world_from_vehicle, w);
+      if (p.norm() > o.max_range_m || (!coverage.sectors.empty() && coverage.Contains(p))) continue;
+      groups[labels.at<int>(r, c)].push_back(p);
+    }
+  }
+  // A region holding a point of the frame's detections is an object measured now.
+  for (const Detection& d : frame) {
+    for (const Eigen::Vector2d& q : d.points) {
+      const Eigen::Vector2d c = (BodyToWorld(world_from_vehicle, q) - grid.origin()) / cell;
+      const cv::Point at(static_cast<int>(std::floor(c.x())), static_cast<int>(std::floor(c.y())));
+      if (at.x >= 0 && at.y >= 0 && at.x < labels.cols && at.y < labels.rows && labels.at<int>(at) > 0) {
+        groups.erase(labels.at<int>(at));
+      }
+    }
+  }
+  std::vector<Detection> remembered;
+  for (const auto& [root, group] : groups) {
+    if (group.size() * cell * cell < o.min_area_m2) continue;
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& p : group) centre += p;
+    remembered.push_back(DetectionFromPoints(group, centre.x() < 0 ? "left" : "right"));
+  }
+  // Groups this close are one object (a wall or a car whose cells the grid lost in places); an
+  // object this close to one of the frame's detections is that object, measured now.
+  std::vector<Detection> out;
+  for (Detection& r : FuseDetections(remembered, same.merge_distance_m)) {
+    bool measured = false;
+    for (const Detection& d : frame) {
+      measured = measured || OneObject(r, d, same);
+    }
+    if (!measured) out.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace dps
