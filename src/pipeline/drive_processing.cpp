@@ -484,10 +484,9 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   if (o_.grid_obstacles) {
     std::map<std::string, int> next_id;
     for (const Detection& d : out.detections) next_id[d.source] = std::max(next_id[d.source], d.id + 1);
-    for (Detection& d : GridObstacles(grid_, ego_, out.coverage, out.detections,
-                                             {pipeline_options_.merge_distance_m, pipeline_options_.vehicle_length_m,
-                                              pipeline_options_.vehicle_width_m},
-                                             o_.grid_obstacle)) {
+    const SameObject same{pipeline_options_.merge_distance_m, pipeline_options_.vehicle_length_m,
+                          pipeline_options_.vehicle_width_m};
+    for (Detection& d : GridObstacles(grid_, ego_, out.coverage, out.detections, same, o_.grid_obstacle)) {
       d.frame = in_.ids[f];
       d.t_s = in_.times[f];
       d.id = next_id[d.source]++;
