@@ -182,7 +182,7 @@ int main(int argc, char** argv) {
       const std::vector<dps::TrackState> tracks =
           tracker.Update(pending_frame, in.t_s + (pending_frame / frames) * 10.0, ego, pending.detections);
       const auto t1 = std::chrono::steady_clock::now();
-      grid.Update(ego, pending.coverage, pending.detections);
+      grid.Update(in.t_s + (pending_frame / frames) * 10.0, ego, pending.coverage, pending.detections);
       const auto t2 = std::chrono::steady_clock::now();
       dps::DrawFrameMap(background, grid, scene.rig.vehicle, pending.detections, tracks, mo, "bench", picture);
       const auto t3 = std::chrono::steady_clock::now();

@@ -12,6 +12,8 @@
 
 namespace {
 
+constexpr double kFrame = 1.0 / 15;  // the frame interval the drives below are sampled at
+
 constexpr double kDeg = M_PI / 180.0;
 
 // A right side view looking out from the right mirror, 45 degrees either way.
@@ -36,6 +38,7 @@ std::vector<dps::Detection> Measured(const dps::PlanarPose& ego, double x0, doub
 }
 
 void TestRemembered() {
+  double t = 0.0;  // seconds, 15 frames/s
   dps::OccupancyGrid grid;
   dps::PlanarPose ego;
   const dps::SameObject same;
@@ -45,7 +48,7 @@ void TestRemembered() {
   for (int f = 0; f < 25; ++f) {
     ego.z_m = 0.6 * f;
     const std::vector<dps::Detection> frame = Measured(ego, 2.9, 5.9, 6.1);
-    grid.Update(ego, RightSector(), frame);
+    grid.Update(t += kFrame, ego, RightSector(), frame);
     const std::vector<dps::Detection> r = dps::GridObstacles(grid, ego, RightSector(), frame, same);
     if (!frame.empty()) {
       ++in_view;
@@ -67,19 +70,20 @@ void TestRemembered() {
   CHECK(in_view >= 5);
   CHECK(remembered_frames >= 5);
   // Left alone, it fades (no ghost): the grid's decay takes the evidence below its threshold.
-  for (int f = 0; f < 60; ++f) grid.Update(ego, RightSector(), {});
+  for (int f = 0; f < 60; ++f) grid.Update(t += kFrame, ego, RightSector(), {});
   CHECK(dps::GridObstacles(grid, ego, RightSector(), {}, same).empty());
 }
 
 // A parked car (4.5 m) the view still measures in part is that car, not a second object; a wall
 // whose cells have a gap under the merge distance is one object.
 void TestSameObject() {
+  double t = 0.0;  // seconds, 15 frames/s
   dps::OccupancyGrid grid;
   dps::PlanarPose ego;
   // The car's near side at world x = 2.5, z = 0..4.5; the vehicle passes it.
   for (int f = 0; f <= 8; ++f) {
     ego.z_m = 0.6 * f;
-    grid.Update(ego, RightSector(), Measured(ego, 2.5, 0.0, 4.5));
+    grid.Update(t += kFrame, ego, RightSector(), Measured(ego, 2.5, 0.0, 4.5));
   }
   // Its front part is in view now, its rear part behind the view: one detection, the measured one.
   const std::vector<dps::Detection> frame = Measured(ego, 2.5, 0.0, 4.5);
@@ -101,7 +105,7 @@ void TestSameObject() {
     ego.z_m = 0.6 * f;
     std::vector<dps::Detection> parts = Measured(ego, 3.0, 0.0, 4.0);
     for (dps::Detection& d : Measured(ego, 3.0, 5.0, 9.0)) parts.push_back(d);
-    walls.Update(ego, RightSector(), parts);
+    walls.Update(t += kFrame, ego, RightSector(), parts);
   }
   const std::vector<dps::Detection> wall = dps::GridObstacles(walls, ego, RightSector(), {}, {});
   CHECK_EQ(wall.size(), size_t{1});

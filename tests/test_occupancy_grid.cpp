@@ -10,6 +10,8 @@
 
 namespace {
 
+constexpr double kFrame = 1.0 / 15;  // the frame interval the drives below are sampled at
+
 dps::Coverage FrontSector() {
   dps::Coverage c;
   c.sectors.push_back({"front", {0, 0.9}, 0.0, 50.0 * M_PI / 180.0});
@@ -24,6 +26,7 @@ std::vector<dps::Detection> Wall(const dps::PlanarPose& ego, double wall_z) {
 }
 
 void TestWall() {
+  double t = 0.0;  // seconds, 15 frames/s
   dps::OccupancyOptions o;
   dps::OccupancyGrid grid(o);
   dps::PlanarPose ego;
@@ -31,7 +34,7 @@ void TestWall() {
   // where the range sigma is 0.1 + 0.002 * 10.5^2 = 0.32 m).
   for (int f = 0; f < 10; ++f) {
     ego.z_m = f * 0.5;
-    grid.Update(ego, FrontSector(), Wall(ego, 15.0));
+    grid.Update(t += kFrame, ego, FrontSector(), Wall(ego, 15.0));
   }
   CHECK(grid.At({0.0, 15.05}) > o.strength_threshold);   // at the wall
   CHECK(grid.At({2.0, 15.1}) > o.strength_threshold);
@@ -43,13 +46,13 @@ void TestWall() {
   CHECK(!cells.empty());
   for (const Eigen::Vector2d& c : cells) CHECK(c.y() >= 15.0 - 0.5 && c.y() <= 15.0 + o.thickness_m + 0.5);
   // The wall is gone: free evidence and decay clear it.
-  for (int f = 0; f < 30; ++f) grid.Update(ego, FrontSector(), {});
+  for (int f = 0; f < 30; ++f) grid.Update(t += kFrame, ego, FrontSector(), {});
   CHECK(grid.At({0.0, 15.05}) <= 0);
   CHECK(grid.ObstacleCells().empty());
   // Driving far re-centres the grid; the old area falls off, the new one works.
   for (int f = 0; f < 10; ++f) {
     ego.z_m = 100 + f;
-    grid.Update(ego, FrontSector(), Wall(ego, 125.0));
+    grid.Update(t += kFrame, ego, FrontSector(), Wall(ego, 125.0));
   }
   CHECK(grid.At({0.0, 125.05}) > o.strength_threshold);
   dps::OccupancyOptions bad;
@@ -57,13 +60,33 @@ void TestWall() {
   CHECK_THROWS_WITH(dps::OccupancyGrid{bad}, dps::Error, "free_weight");
 }
 
+// The evidence fades with time, whatever the frame rate: a wall left unseen for 1 s keeps
+// 0.5^(1 / half_life_s) of its evidence after 15 frames at 15 frames/s and after 30 at 30 frames/s.
+void TestFadesWithTime() {
+  dps::OccupancyOptions o;
+  dps::PlanarPose ego;
+  const dps::Coverage nothing_seen{{dps::Sector{"front", {0, 0.9}, 0.0, 1e-3}}};  // a sliver beside the wall
+  for (const int fps : {15, 30}) {
+    dps::OccupancyGrid grid(o);
+    grid.Update(0.0, ego, FrontSector(), Wall(ego, 10.0));
+    const double seen = grid.At({2.0, 10.05});
+    CHECK(seen > 0);
+    for (int f = 1; f <= fps; ++f) grid.Update(static_cast<double>(f) / fps, ego, nothing_seen, {});
+    CHECK_NEAR(grid.At({2.0, 10.05}), seen * std::pow(0.5, 1.0 / o.half_life_s), 1e-4);
+  }
+  dps::OccupancyOptions bad;
+  bad.half_life_s = 0;
+  CHECK_THROWS_WITH(dps::OccupancyGrid{bad}, dps::Error, "half_life_s");
+}
+
 // The drawing: a turned vehicle in front of a wall; every map pixel that shows the grid must show
 // the cell under it, found the long way (map pixel -> vehicle -> world -> At). Pixels on cell
 // borders may land in the neighbouring cell.
 void TestDraw() {
+  double t = 0.0;  // seconds, 15 frames/s
   dps::OccupancyGrid grid;
   dps::PlanarPose ego{1.3, 2.1, 0.4};
-  for (int f = 0; f < 6; ++f) grid.Update(ego, FrontSector(), Wall(ego, 12.0));
+  for (int f = 0; f < 6; ++f) grid.Update(t += kFrame, ego, FrontSector(), Wall(ego, 12.0));
   const double range = 20.0;
   cv::Mat map(300, 300, CV_8UC3, cv::Scalar(255, 255, 255));
   grid.Draw(map, range);
@@ -98,6 +121,7 @@ void TestDraw() {
 
 int main() {
   TestWall();
+  TestFadesWithTime();
   TestDraw();
   return dps_test::Report();
 }

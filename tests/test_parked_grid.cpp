@@ -43,6 +43,7 @@ void TestParkedCarsGrid() {
   dps::OccupancyGrid overlapped_grid;
   dps::FrameOutput pending;
   dps::PlanarPose pending_ego;
+  double pending_t = 0.0;
   int alongside_runs = 0, mismatches = 0;
   dps::FrameInput last;
   dps::FrameState state;
@@ -56,11 +57,11 @@ void TestParkedCarsGrid() {
     in.motion_known = f > 0;
     if (f > 0) in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(f - 1), in.t_s);
     const dps::FrameOutput out = pipeline.Process(in);
-    grid.Update(state.ego, out.coverage, out.detections);
+    grid.Update(in.t_s, state.ego, out.coverage, out.detections);
     std::vector<std::function<void()>> alongside;
     if (f > 0) {
       alongside.push_back([&] {
-        overlapped_grid.Update(pending_ego, pending.coverage, pending.detections);
+        overlapped_grid.Update(pending_t, pending_ego, pending.coverage, pending.detections);
         ++alongside_runs;
       });
     }
@@ -72,9 +73,10 @@ void TestParkedCarsGrid() {
     mismatches += !same;
     pending = std::move(out2);
     pending_ego = state.ego;
+    pending_t = in.t_s;
     last = in;
   }
-  overlapped_grid.Update(pending_ego, pending.coverage, pending.detections);
+  overlapped_grid.Update(pending_t, pending_ego, pending.coverage, pending.detections);
   CHECK_EQ(alongside_runs, frames - 1);
   CHECK_EQ(mismatches, 0);
   int differing_cells = 0;

@@ -154,7 +154,7 @@ void TestTracksAndGrid() {
   dps::OccupancyGrid grid;
   std::vector<Eigen::Vector2d> wall;
   for (double x = -2.0; x <= 2.0 + 1e-9; x += 0.1) wall.emplace_back(x, 12.0);
-  for (int f = 0; f < 5; ++f) grid.Update(dps::PlanarPose{}, FrontOnly(), {dps::DetectionFromPoints(wall, "front")});
+  for (int f = 0; f < 5; ++f) grid.Update(f / 15.0, dps::PlanarPose{}, FrontOnly(), {dps::DetectionFromPoints(wall, "front")});
   const cv::Mat framed = dps::DrawFrameMap(background, grid, car, {}, {}, kMap, "grid");
   const cv::Vec3b at_wall = framed.at<cv::Vec3b>(Pixel(0.0, 12.1)), before = framed.at<cv::Vec3b>(Pixel(0.0, 6.0));
   std::printf("grid on the map: wall (%d, %d, %d), ground before it (%d, %d, %d)\n", at_wall[0], at_wall[1], at_wall[2],

@@ -227,7 +227,7 @@ void OccupancyOptions::Check() const {
   Require(free_weight < 0, "free_weight", free_weight, "< 0");
   Require(occupied_weight > 0, "occupied_weight", occupied_weight, "> 0");
   Require(thickness_m >= 0, "thickness_m", thickness_m, ">= 0");
-  Require(decay > 0 && decay <= 1, "decay", decay, "0 < decay <= 1");
+  Require(half_life_s > 0, "half_life_s", half_life_s, "> 0");
   Require(clamp > 0, "clamp", clamp, "> 0");
 }
 
@@ -270,7 +270,11 @@ cv::Mat OccupancyGrid::EvidenceImage() const {
 
 double OccupancyGrid::AtVehicle(const Eigen::Vector2d& v) const { return At(BodyToWorld(pose_, v)); }
 
-void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, const std::vector<Detection>& detections) {
+void OccupancyGrid::Update(double t_s, const PlanarPose& pose, const Coverage& coverage,
+                           const std::vector<Detection>& detections) {
+  // The first frame, or time not moving on: no decay.
+  const double dt = std::isfinite(last_t_s_) && t_s > last_t_s_ ? t_s - last_t_s_ : 0.0;
+  last_t_s_ = t_s;
   pose_ = pose;
   Recentre({pose.x_m, pose.z_m});
   const GridFrame frame{origin_, options_.cell_m};
@@ -305,7 +309,8 @@ void OccupancyGrid::Update(const PlanarPose& pose, const Coverage& coverage, con
     }
   }
   // Decay, this frame's evidence, clamp: one pass (no evidence outside the touched cells).
-  const float decay = static_cast<float>(options_.decay), clamp = static_cast<float>(options_.clamp);
+  const float decay = static_cast<float>(std::pow(0.5, dt / options_.half_life_s));
+  const float clamp = static_cast<float>(options_.clamp);
   for (int row = 0; row < sum_.rows; ++row) {
     float* sum = sum_.ptr<float>(row);
     const bool in_rows = row >= touched.y && row < touched.y + touched.height;

@@ -480,7 +480,7 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   char caption[128];
   std::snprintf(caption, sizeof(caption), "%s  frame %d  t %.2f s  %zu objects", s_.drive.c_str(), in_.ids[f], in_.times[f],
                 out.detections.size());
-  grid_.Update(ego_, out.coverage, out.detections);
+  grid_.Update(in_.times[f], ego_, out.coverage, out.detections);
   if (o_.grid_obstacles) {
     std::map<std::string, int> next_id;
     for (const Detection& d : out.detections) next_id[d.source] = std::max(next_id[d.source], d.id + 1);

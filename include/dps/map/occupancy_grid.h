@@ -7,11 +7,12 @@
 // point on that bearing is found: cells before it get a free (negative) weight, cells at it and a
 // little behind (thickness unknown) an occupied (positive) weight, shaped by the range
 // uncertainty of the measurement (disparity noise: sigma grows with range squared); bearings
-// without an obstacle are free up to free_range_m; unseen cells get nothing. The sum decays
-// every frame and is clamped, so a vehicle that leaves does not stay as a ghost. Cells > 0 are
+// without an obstacle are free up to free_range_m; unseen cells get nothing. The sum decays with
+// time (half_life_s, whatever the frame rate) and is clamped, so a vehicle that leaves does not stay as a ghost. Cells > 0 are
 // occupied, < 0 free, 0 unknown; obstacles are the cells above strength_threshold.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,7 +38,8 @@ struct OccupancyOptions {
   double thickness_m = 0.6;       // occupied evidence behind the measured surface, >= 0
   double sigma0_m = 0.1;          // range sigma = sigma0 + sigma_per_m2 * range^2
   double sigma_per_m2 = 0.002;
-  double decay = 0.95;            // the sum is multiplied by this every frame, (0, 1]
+  // Without new evidence the sum halves in this time (0.95 per frame at 15 frames/s), > 0.
+  double half_life_s = 0.9;
   double clamp = 6.0;             // |sum| <= clamp, > 0
   double strength_threshold = 2.0;  // obstacle cells: sum above this (T_strength)
 
@@ -48,9 +50,10 @@ class OccupancyGrid {
  public:
   explicit OccupancyGrid(const OccupancyOptions& options = OccupancyOptions());
 
-  // Adds one frame: the vehicle's pose in the world, the views' sectors (vehicle frame) and the
-  // frame's detections (their ground points, vehicle frame).
-  void Update(const PlanarPose& world_from_vehicle, const Coverage& coverage,
+  // Adds one frame: its time (seconds; the evidence decays over the time since the previous
+  // frame), the vehicle's pose in the world, the views' sectors (vehicle frame) and the frame's
+  // detections (their ground points, vehicle frame).
+  void Update(double t_s, const PlanarPose& world_from_vehicle, const Coverage& coverage,
               const std::vector<Detection>& detections);
 
   // The evidence at a world point (0 outside the grid).
@@ -86,6 +89,7 @@ class OccupancyGrid {
   cv::Mat delta_;                     // CV_32F, one frame's evidence (kept to save its allocation)
   Eigen::Vector2d origin_{0, 0};      // world (x, z) of cell (0, 0)'s corner
   PlanarPose pose_;                   // the latest vehicle pose
+  double last_t_s_ = std::numeric_limits<double>::quiet_NaN();  // the latest frame's time
 };
 
 }  // namespace dps
