@@ -8,8 +8,9 @@
 // little behind (thickness unknown) an occupied (positive) weight, shaped by the range
 // uncertainty of the measurement (disparity noise: sigma grows with range squared); bearings
 // without an obstacle are free up to free_range_m; unseen cells get nothing. The sum decays with
-// time (half_life_s, whatever the frame rate) and is clamped, so a vehicle that leaves does not stay as a ghost. Cells > 0 are
-// occupied, < 0 free, 0 unknown; obstacles are the cells above strength_threshold.
+// time (half_life_s, whatever the frame rate) and is clamped, so a vehicle that leaves does not
+// stay as a ghost. Cells > 0 are occupied, < 0 free, 0 unknown; obstacles are the cells above
+// strength_threshold.
 #pragma once
 
 #include <limits>
