@@ -179,10 +179,10 @@ int main(int argc, char** argv) {
       const dps::FrameInput& in = inputs[pending_frame % frames];
       const auto t0 = std::chrono::steady_clock::now();
       ego = dps::Compose(ego, in.current_in_previous);
-      const std::vector<dps::TrackState> tracks =
-          tracker.Update(pending_frame, in.t_s + (pending_frame / frames) * 10.0, ego, pending.detections);
+      const double t_s = in.t_s + (pending_frame / frames) * 10.0;  // the drive repeated, time going on
+      const std::vector<dps::TrackState> tracks = tracker.Update(pending_frame, t_s, ego, pending.detections);
       const auto t1 = std::chrono::steady_clock::now();
-      grid.Update(in.t_s + (pending_frame / frames) * 10.0, ego, pending.coverage, pending.detections);
+      grid.Update(t_s, ego, pending.coverage, pending.detections);
       const auto t2 = std::chrono::steady_clock::now();
       dps::DrawFrameMap(background, grid, scene.rig.vehicle, pending.detections, tracks, mo, "bench", picture);
       const auto t3 = std::chrono::steady_clock::now();

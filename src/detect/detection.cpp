@@ -72,6 +72,15 @@ void Renumber(std::vector<Detection>* d) {
 
 }  // namespace
 
+bool Near(const Detection& a, const Detection& b, double distance_m) {
+  for (const Eigen::Vector2d& p : PointsOf(a)) {
+    for (const Eigen::Vector2d& q : PointsOf(b)) {
+      if ((p - q).norm() <= distance_m) return true;
+    }
+  }
+  return false;
+}
+
 std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double merge_distance_m) {
   const size_t n = in.size();
   std::vector<size_t> parent(n);
@@ -79,18 +88,7 @@ std::vector<Detection> FuseDetections(const std::vector<Detection>& in, double m
   std::function<size_t(size_t)> root = [&](size_t i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
   for (size_t i = 0; i < n; ++i) {
     for (size_t j = i + 1; j < n; ++j) {
-      if (in[i].frame != in[j].frame) continue;
-      bool close = false;
-      for (const Eigen::Vector2d& a : PointsOf(in[i])) {
-        for (const Eigen::Vector2d& b : PointsOf(in[j])) {
-          if ((a - b).norm() <= merge_distance_m) {
-            close = true;
-            break;
-          }
-        }
-        if (close) break;
-      }
-      if (close) parent[root(i)] = root(j);
+      if (in[i].frame == in[j].frame && Near(in[i], in[j], merge_distance_m)) parent[root(i)] = root(j);
     }
   }
   std::vector<Detection> out;

@@ -1,11 +1,13 @@
 #include "dps/map/grid_obstacles.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <utility>
 
 #include <opencv2/imgproc.hpp>
 
+#include "dps/detect/object_attributes.h"
 #include "dps/util/error.h"
 
 namespace dps {
@@ -22,19 +24,12 @@ namespace {
 // merge distance, or together fit into one vehicle's footprint (a parked car's part in view and its
 // remembered part behind the view's edge, the stretch between them unseen).
 bool OneObject(const Detection& remembered, const Detection& measured, const SameObject& same) {
-  std::vector<cv::Point2f> both;
-  for (const Detection* e : {&remembered, &measured}) {
-    for (const Eigen::Vector2d& p : e->points) both.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
-  }
-  for (const Eigen::Vector2d& q : measured.points) {
-    for (const Eigen::Vector2d& p : remembered.points) {
-      if ((p - q).norm() <= same.merge_distance_m) return true;
-    }
-  }
-  if (same.vehicle_length_m <= 0 || both.empty()) return false;
-  const cv::RotatedRect box = cv::minAreaRect(both);
-  return std::max(box.size.width, box.size.height) <= same.vehicle_length_m &&
-         std::min(box.size.width, box.size.height) <= same.vehicle_width_m;
+  if (Near(remembered, measured, same.merge_distance_m)) return true;
+  if (same.vehicle_length_m <= 0) return false;
+  std::vector<Eigen::Vector2d> both = remembered.points;
+  both.insert(both.end(), measured.points.begin(), measured.points.end());
+  const auto [length, width] = FootprintExtents(both);
+  return length <= same.vehicle_length_m && width <= same.vehicle_width_m;
 }
 
 }  // namespace
@@ -82,10 +77,8 @@ std::vector<Detection> GridObstacles(const OccupancyGrid& grid, const PlanarPose
   // object this close to one of the frame's detections is that object, measured now.
   std::vector<Detection> out;
   for (Detection& r : FuseDetections(remembered, same.merge_distance_m)) {
-    bool measured = false;
-    for (const Detection& d : frame) {
-      measured = measured || OneObject(r, d, same);
-    }
+    const bool measured =
+        std::any_of(frame.begin(), frame.end(), [&](const Detection& d) { return OneObject(r, d, same); });
     if (!measured) out.push_back(std::move(r));
   }
   return out;

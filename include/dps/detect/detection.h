@@ -47,6 +47,10 @@ struct Detection {
 // A detection summarising ground points (at least one): nearest point, extent, count.
 Detection DetectionFromPoints(const std::vector<Eigen::Vector2d>& points, const std::string& source);
 
+// Whether a ground point of each detection comes within distance_m of one of the other's (a
+// detection without points: its nearest point).
+bool Near(const Detection& a, const Detection& b, double distance_m);
+
 // Merges the detections of one frame whose ground points come within merge_distance_m of each
 // other (the parts of one object: a car's back and side, or one car seen by the front pair and a
 // side camera at once), so that each object is one entry of the map. The merged detection keeps
