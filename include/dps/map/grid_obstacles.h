@@ -39,7 +39,9 @@ struct SameObject {
 // the threshold in places stays one region) with obstacle cells (above the grid's strength
 // threshold) outside `coverage`, within max_range_m and covering at least min_area_m2; regions
 // within merge_distance_m of each other one object (FuseDetections). Each a detection (vehicle
-// frame, its obstacle cells' centres as points; source "left" or "right" by the side of its centre;
+// frame, its surface as points: in strips along the side view's axis, the evidence-weighted mean
+// depth of its obstacle cells less half the grid's thickness; source "left" or "right" by the side
+// of its centre;
 // frame, time and id left to the caller), unless it is measured now: its region holds a point of
 // one of `frame`'s detections, or it is one object with one of them (SameObject).
 std::vector<Detection> GridObstacles(const OccupancyGrid& grid, const PlanarPose& world_from_vehicle,
