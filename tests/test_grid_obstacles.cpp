@@ -3,7 +3,8 @@
 // (their position in the current vehicle frame known from the ego motion), as detections of the
 // right side; nothing is remembered inside the view, nor a part of an object the frame measures;
 // a wall whose cells the grid lost in places is one object; remembered objects fade; a pole
-// measured with range noise is remembered at its surface, not at the nearest of its noisy hits.
+// measured with range noise is remembered at its surface, not over the depth its evidence spans.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
