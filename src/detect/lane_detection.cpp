@@ -272,24 +272,31 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
     if (l.offset_m < 0 && (!left || l.offset_m > left->offset_m)) left = &l;
     if (l.offset_m > 0 && (!right || l.offset_m < right->offset_m)) right = &l;
   }
+  // No lane is wider than two of the narrowest, and the car is inside its own: a line farther out
+  // is a neighbour's (the ego lane's line on that side missed, e.g. under a car beside us).
+  const double widest = 2 * min_lane_width_m;
+  if (left && right && right->offset_m - left->offset_m > widest) (-left->offset_m > right->offset_m ? left : right) = nullptr;
+  if (left && -left->offset_m > widest) left = nullptr;
+  if (right && right->offset_m > widest) right = nullptr;
+  // The neighbours' outer boundaries: at least a lane beyond the ego lane's boundary on their side
+  // or, without it, two lanes beyond the other side's.
+  const double infinity = std::numeric_limits<double>::infinity();
+  const double left2_below = left ? left->offset_m - min_lane_width_m : right ? right->offset_m - widest : -infinity;
+  const double right2_above = right ? right->offset_m + min_lane_width_m : left ? left->offset_m + widest : infinity;
   const LaneLine* left2 = nullptr;
   const LaneLine* right2 = nullptr;
   for (const LaneLine& l : lines) {
-    if (left && l.offset_m < left->offset_m - min_lane_width_m && (!left2 || l.offset_m > left2->offset_m)) left2 = &l;
-    if (right && l.offset_m > right->offset_m + min_lane_width_m && (!right2 || l.offset_m < right2->offset_m)) {
-      right2 = &l;
-    }
+    if (l.offset_m < left2_below && (!left2 || l.offset_m > left2->offset_m)) left2 = &l;
+    if (l.offset_m > right2_above && (!right2 || l.offset_m < right2->offset_m)) right2 = &l;
   }
   const std::pair<const char*, const LaneLine*> named[] = {{"left2", left2}, {"left", left}, {"right", right}, {"right2", right2}};
   for (const auto& [name, l] : named) {
     if (l) out.boundaries.push_back({0, 0.0, name, l->offset_m, std::atan(l->slope) * kDegPerRad, 0.0, l->type, l->confidence});
   }
-  // A lane wider than two of the narrowest is two lanes with the line between them missed; one
-  // narrower than the narrowest is no lane (a line that is not a boundary, e.g. an edge on the
-  // road the car is turning onto).
+  // A lane narrower than the narrowest is no lane (a line that is not a boundary, e.g. an edge on
+  // the road the car is turning onto).
   const double heading = left && right ? std::atan((left->slope + right->slope) / 2) : 0.0;
-  if (left && right && (right->offset_m - left->offset_m) <= 2 * min_lane_width_m &&
-      (right->offset_m - left->offset_m) * std::cos(heading) >= min_lane_width_m) {
+  if (left && right && (right->offset_m - left->offset_m) * std::cos(heading) >= min_lane_width_m) {
     out.has_ego = true;
     out.ego.lp_m = -(left->offset_m + right->offset_m) / 2;
     out.ego.lane_width_m = (right->offset_m - left->offset_m) * std::cos(heading);

@@ -59,10 +59,13 @@ struct LaneLine {
 };
 
 // A frame's lanes from its lines: the nearest on each side of the car are the ego lane's (left,
-// right), the next beyond at least min_lane_width_m out its neighbours' (left2, right2); the ego's
-// lp, lane width and heading from left and right (none when they lie more than twice
-// min_lane_width_m apart: two lanes, the line between them missed; nor when the lane is narrower
-// than min_lane_width_m across: one of them is no boundary); a jump of lp from
+// right), the next beyond at least min_lane_width_m out its neighbours' (left2, right2). No lane is
+// wider than twice min_lane_width_m and the car is inside its own: when the nearest lines on the
+// two sides lie farther apart than that (the ego lane's line on one side missed), the one farther
+// from the car is not the ego lane's, and neither is a line farther than that from the car; the
+// first line beyond twice min_lane_width_m from the other side's boundary is then the
+// neighbour's. The ego's lp, lane width and heading from left and right (none when the lane is
+// narrower than min_lane_width_m across: one of them is no boundary); a jump of lp from
 // *previous_lp by more than half a lane is a lane change (event); *previous_lp then becomes lp.
 LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_width_m,
                         std::optional<double>* previous_lp);
