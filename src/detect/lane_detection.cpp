@@ -275,7 +275,13 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
   // No lane is wider than two of the narrowest, and the car is inside its own: a line farther out
   // is a neighbour's (the ego lane's line on that side missed, e.g. under a car beside us).
   const double widest = 2 * min_lane_width_m;
-  if (left && right && right->offset_m - left->offset_m > widest) (-left->offset_m > right->offset_m ? left : right) = nullptr;
+  if (left && right && right->offset_m - left->offset_m > widest) {
+    if (-left->offset_m > right->offset_m) {
+      left = nullptr;
+    } else {
+      right = nullptr;
+    }
+  }
   if (left && -left->offset_m > widest) left = nullptr;
   if (right && right->offset_m > widest) right = nullptr;
   // The neighbours' outer boundaries: at least a lane beyond the ego lane's boundary on their side

@@ -41,9 +41,8 @@ struct SameObject {
 // within merge_distance_m of each other one object (FuseDetections). Each a detection (vehicle
 // frame, its surface as points: in strips along the side view's axis, the evidence-weighted mean
 // depth of its obstacle cells less half the grid's thickness; source "left" or "right" by the side
-// of its centre;
-// frame, time and id left to the caller), unless it is measured now: its region holds a point of
-// one of `frame`'s detections, or it is one object with one of them (SameObject).
+// of its centre; frame, time and id left to the caller), unless it is measured now: its region
+// holds a point of one of `frame`'s detections, or it is one object with one of them (SameObject).
 std::vector<Detection> GridObstacles(const OccupancyGrid& grid, const PlanarPose& world_from_vehicle,
                                      const Coverage& coverage, const std::vector<Detection>& frame,
                                      const SameObject& same, const GridObstacleOptions& options = {});
