@@ -5,6 +5,7 @@
 // them on the road.
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 
 #include "check.h"
 #include "dps/camera/rig_io.h"
@@ -271,6 +273,60 @@ void TestCheckLanes() {
   CHECK(err.find("--frame needs --lanes") != std::string::npos);
 }
 
+
+// The grey level most pixels of a picture have among its grey ones (B = G = R): the image under a
+// check's drawing.
+int CommonGrey(const cv::Mat& bgr) {
+  std::vector<int> counts(256, 0);
+  for (int r = 0; r < bgr.rows; ++r) {
+    for (int c = 0; c < bgr.cols; ++c) {
+      const cv::Vec3b p = bgr.at<cv::Vec3b>(r, c);
+      if (p[0] == p[1] && p[1] == p[2]) ++counts[p[0]];
+    }
+  }
+  return static_cast<int>(std::max_element(counts.begin(), counts.end()) - counts.begin());
+}
+
+// `check --drive`: frame N of a recorded drive, one camera as a video and one as an image folder
+// (each frame a flat grey of its own level), drawn under each camera's check; a frame the drive
+// lacks, and --drive with --images, refused.
+void TestCheckDrive() {
+  const std::string rig = (kWork / "surround.yaml").string();  // TestCheckLanes' import
+  const dps::Rig surround = dps::ReadRig(rig);
+  const cv::Size left_size(surround.Camera("left").model.width(), surround.Camera("left").model.height());
+  const cv::Size right_size(surround.Camera("right").model.width(), surround.Camera("right").model.height());
+  const fs::path drive = kWork / "check_drive";
+  fs::create_directories(drive / "left");
+  cv::VideoWriter video((drive / "right.avi").string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10, right_size);
+  CHECK(video.isOpened());
+  for (int k = 0; k < 5; ++k) {
+    video.write(cv::Mat(right_size, CV_8UC3, cv::Scalar::all(40 + 40 * k)));
+    char name[16];
+    std::snprintf(name, sizeof(name), "%06d.png", k);
+    cv::imwrite((drive / "left" / name).string(), cv::Mat(left_size, CV_8UC3, cv::Scalar::all(200 - 40 * k)));
+  }
+  video.release();
+  std::string out, err;
+  const std::string check = kTool + " check " + rig + " --drive " + drive.string() + " --range 2 --out " +
+                            (kWork / "drive_check").string();
+  CHECK_EQ(Run(check + " --frame 3", &out, &err), 0);
+  CHECK(err.find("frame 3") != std::string::npos);
+  const int left = CommonGrey(cv::imread((kWork / "drive_check" / "check_left.png").string()));
+  const int right = CommonGrey(cv::imread((kWork / "drive_check" / "check_right.png").string()));
+  std::printf("check --drive --frame 3: left (PNG folder) grey %d (frame 3: 80), right (MJPG video) %d (frame 3: 160)\n",
+              left, right);
+  CHECK_EQ(left, 80);
+  CHECK(std::abs(right - 160) <= 3);
+  CHECK(!fs::exists(kWork / "drive_check" / "check_front.png"));  // the drive has no front camera
+  CHECK_EQ(Run(check, &out, &err), 0);  // no --frame: the drive's first
+  CHECK(err.find("frame 0") != std::string::npos);
+  CHECK_EQ(CommonGrey(cv::imread((kWork / "drive_check" / "check_left.png").string())), 200);
+  CHECK_EQ(Run(check + " --frame 7", &out, &err), 1);
+  CHECK(err.find("no frame 7") != std::string::npos);
+  CHECK_EQ(Run(check + " --images right=" + (kWork / "grey.png").string(), &out, &err), 1);
+  CHECK(err.find("--images NAME=IMAGE,... or --drive DRIVE") != std::string::npos);
+}
+
 }  // namespace
 
 int main() {
@@ -278,6 +334,7 @@ int main() {
   TestImportShowProject();
   TestCheckAndBadInputs();
   TestCheckLanes();
+  TestCheckDrive();
   // A mirror camera (its image cropped as its calibration says), the OCamCalib sample (a wide-angle
   // lens) and a ~190 degree fisheye of the same toolbox.
   // The mirror camera's view is less straight (3.2 px over its 401 px board, docs/camera_models.md):

@@ -1,16 +1,21 @@
 // dps-rig: bring a real rig's calibration in, look at it, and use it from scripts.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Geometry>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "cli.h"
 #include "dps/camera/calibration_import.h"
 #include "dps/camera/rig_io.h"
 #include "dps/camera/rig_report.h"
+#include "dps/pipeline/drive_io.h"
 #include "dps/stereo/virtual_view.h"
 #include "dps/util/atomic_file.h"
 #include "dps/util/image.h"
@@ -53,13 +58,15 @@ const char* kUsage = R"(usage: dps-rig COMMAND ...
       CSV with a header line; the ray is a unit vector in the vehicle frame from the camera's
       viewpoint. valid = 0 where the model has no answer (the other columns are then empty).
 
-  dps-rig check rig.yaml --images NAME=IMAGE[,NAME=IMAGE...] --out DIR [--range M] [--grid M] [--crop X,Y]
-               [--ext png|jpg] [--lanes lanes.csv [--frame N]]
+  dps-rig check rig.yaml (--images NAME=IMAGE[,NAME=IMAGE...] | --drive DRIVE) --out DIR [--frame N]
+               [--range M] [--grid M] [--crop X,Y] [--ext png|jpg] [--lanes lanes.csv]
       Draws the valid field's outline (green), the horizon (yellow), a road grid (cyan, every
       --grid metres within --range) and the own car (red) over each camera's image:
       DIR/check_NAME.png (or .jpg). If the grid is not on the road, the calibration or mounting is
-      wrong. --lanes: also the lane boundaries dps-process found (its lanes.csv) in frame N (default
-      the file's first), magenta and named, within --range along the car.
+      wrong. --drive: the images are frame N of a recorded drive (each rig camera's video or image
+      folder the drive has, DESIGN.md 3.2; default the first of lanes.csv or of the drive).
+      --lanes: also the lane boundaries dps-process found (its lanes.csv) in frame N (default the
+      file's first), magenta and named, within --range along the car.
 
   dps-rig view rig.yaml --camera NAME --image IMAGE --out VIEW.png [--yaw-deg A] [--pitch-deg P]
                [--fov-deg F] [--size WxH] [--crop X,Y]
@@ -192,11 +199,10 @@ int Unproject(const dps_cli::Args& args, const dps::Rig& rig) {
   });
 }
 
-// Reads an image; with --crop X,Y, the model's size from column X, row Y (for calibrations of a
-// crop of the camera's frames).
-cv::Mat ReadImage(const dps_cli::Args& args, const std::string& path, const dps::CameraModel& model) {
-  cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
-  if (image.empty()) throw dps::Error(path + ": cannot read image");
+// An image read (as BGR) for a camera; with --crop X,Y, the model's size from column X, row Y (for
+// calibrations of a crop of the camera's frames).
+cv::Mat CameraImage(const dps_cli::Args& args, cv::Mat image, const std::string& path, const dps::CameraModel& model) {
+  if (image.channels() == 1) cv::cvtColor(image, image, cv::COLOR_GRAY2BGR);
   if (args.Has("crop")) {
     const std::vector<double> xy = Numbers("crop", args.Get("crop"));
     const cv::Rect crop(xy.size() == 2 ? static_cast<int>(xy[0]) : -1, xy.size() == 2 ? static_cast<int>(xy[1]) : -1,
@@ -215,32 +221,80 @@ cv::Mat ReadImage(const dps_cli::Args& args, const std::string& path, const dps:
   return image;
 }
 
+cv::Mat ReadImage(const dps_cli::Args& args, const std::string& path, const dps::CameraModel& model) {
+  cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
+  if (image.empty()) throw dps::Error(path + ": cannot read image");
+  return CameraImage(args, image, path, model);
+}
+
+// Frame `*number` of each rig camera that a recorded drive has (a video or an image folder; a
+// camera it lacks is left out), by camera name; without a number, the first camera's first frame
+// (and *number becomes it). Throws dps::Error when the drive has none of the cameras or lacks the
+// frame.
+std::vector<std::pair<std::string, cv::Mat>> DriveFrames(const dps_cli::Args& args, const dps::Rig& rig,
+                                                         const std::string& drive, std::optional<long>* number) {
+  std::vector<std::pair<std::string, cv::Mat>> frames;
+  for (const dps::RigCamera& c : rig.cameras) {
+    if (dps::FrameSource::Find(drive, c.name).empty()) continue;
+    const std::unique_ptr<dps::FrameSource> source = dps::FrameSource::Open(drive, c.name);
+    if (!*number) *number = source->first_number();
+    source->SkipTo(**number);
+    cv::Mat image;
+    const std::vector<long> numbers = source->numbers();
+    const bool listed = numbers.empty() || std::find(numbers.begin(), numbers.end(), **number) != numbers.end();
+    if (!source->Read(&image) || !listed) {
+      throw dps::Error(dps::Str(source->description(), ": no frame ", **number));
+    }
+    frames.emplace_back(c.name, CameraImage(args, image, source->description(), c.model));
+  }
+  if (frames.empty()) throw dps::Error(drive + ": no video or image folder of the rig's cameras");
+  return frames;
+}
+
 int Check(const dps_cli::Args& args, const dps::Rig& rig) {
-  if (!args.Has("images") || !args.Has("out")) throw dps::Error("check: needs --images NAME=IMAGE,... and --out DIR");
+  if (args.Has("images") == args.Has("drive") || !args.Has("out")) {
+    throw dps::Error("check: needs --images NAME=IMAGE,... or --drive DRIVE, and --out DIR");
+  }
   const std::string dir = args.Get("out"), ext = args.Get("ext", "png");
   if (ext != "png" && ext != "jpg") throw dps::Error("option --ext: expected png or jpg, got '" + ext + "'");
-  const auto images = args.Pairs("images", "IMAGE");
+  std::vector<std::pair<std::string, std::string>> images;
+  if (args.Has("images")) images = args.Pairs("images", "IMAGE");
   std::vector<std::string> inputs{args.positional()[1]};
   for (const auto& [camera, image] : images) inputs.push_back(image);
+  if (args.Has("drive")) inputs.push_back(args.Get("drive"));
   if (args.Has("lanes")) inputs.push_back(args.Get("lanes"));
   dps::CheckOutputFolder(dir, inputs);
-  std::filesystem::create_directories(dir);
+  std::vector<dps::LaneBoundaryRow> rows;
+  if (args.Has("lanes")) {
+    rows = dps::ReadLaneBoundaries(args.Get("lanes"));
+  } else if (args.Has("frame") && !args.Has("drive")) {
+    throw dps::Error("check: --frame needs --lanes or --drive");
+  }
+  std::optional<long> frame;
+  if (args.Has("frame")) {
+    frame = args.Integer("frame", 0);
+  } else if (!rows.empty()) {
+    frame = rows.front().frame;
+  }
+  std::vector<std::pair<std::string, cv::Mat>> pictures;
+  if (args.Has("drive")) {
+    pictures = DriveFrames(args, rig, args.Get("drive"), &frame);
+    std::cerr << args.Get("drive") << ": frame " << *frame << "\n";
+  }
+  for (const auto& [camera, image] : images) pictures.emplace_back(camera, ReadImage(args, image, rig.Camera(camera).model));
   std::vector<dps::LaneBoundaryRow> lanes;
   if (args.Has("lanes")) {
-    const std::vector<dps::LaneBoundaryRow> rows = dps::ReadLaneBoundaries(args.Get("lanes"));
-    const int frame = args.Integer("frame", rows.empty() ? 0 : rows.front().frame);
     for (const dps::LaneBoundaryRow& b : rows) {
-      if (b.frame == frame) lanes.push_back(b);
+      if (b.frame == frame.value_or(0)) lanes.push_back(b);
     }
-    std::cerr << args.Get("lanes") << ": frame " << frame << ", " << lanes.size() << " boundar"
+    std::cerr << args.Get("lanes") << ": frame " << frame.value_or(0) << ", " << lanes.size() << " boundar"
               << (lanes.size() == 1 ? "y" : "ies") << "\n";
-  } else if (args.Has("frame")) {
-    throw dps::Error("check: --frame needs --lanes");
   }
+  std::filesystem::create_directories(dir);
   const double range_m = args.Number("range", 20.0), grid_m = args.Number("grid", 1.0);
-  for (const auto& [camera, image] : images) {
+  for (const auto& [camera, image] : pictures) {
     const dps::RigCamera& c = rig.Camera(camera);
-    cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, ReadImage(args, image, c.model), range_m, grid_m);
+    cv::Mat drawn = dps::DrawRigCheck(c, rig.vehicle, image, range_m, grid_m);
     if (!lanes.empty()) dps::DrawLaneBoundaries(c, lanes, range_m, &drawn);
     const std::string out = (std::filesystem::path(dir) / ("check_" + c.name + "." + ext)).string();
     dps::WriteImageAtomically(out, drawn);
@@ -280,7 +334,7 @@ int main(int argc, char** argv) {
     const dps_cli::Args args(argc, argv,
                              {"format", "out", "name", "vehicle-length", "vehicle-width", "size", "origin", "bev-height",
                               "unit-m", "axis", "height", "range", "camera", "images", "grid", "image", "yaw-deg",
-                              "pitch-deg", "fov-deg", "crop", "ext", "lanes", "frame"},
+                              "pitch-deg", "fov-deg", "crop", "ext", "lanes", "frame", "drive"},
                              {});
     if (args.help() || args.positional().empty()) {
       std::cout << kUsage;

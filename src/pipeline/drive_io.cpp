@@ -121,18 +121,23 @@ std::vector<long> FrameSource::numbers() const {
   return n;
 }
 
-std::unique_ptr<FrameSource> FrameSource::Open(const std::string& drive_dir, const std::string& camera,
-                                               bool allow_gaps) {
+std::string FrameSource::Find(const std::string& drive_dir, const std::string& camera) {
   const fs::path folder = fs::path(drive_dir) / camera;
-  if (fs::is_directory(folder)) return std::make_unique<ImageFolder>(folder, allow_gaps);
+  if (fs::is_directory(folder)) return folder.string();
   if (fs::is_directory(drive_dir)) {
     for (const auto& e : fs::directory_iterator(drive_dir)) {
-      if (e.is_regular_file() && e.path().stem() == camera && e.path().extension() != ".yaml") {
-        return std::make_unique<VideoFile>(e.path().string());
-      }
+      if (e.is_regular_file() && e.path().stem() == camera && e.path().extension() != ".yaml") return e.path().string();
     }
   }
-  throw Error(Str(drive_dir, ": no '", camera, "/' image folder or '", camera, ".<ext>' video"));
+  return {};
+}
+
+std::unique_ptr<FrameSource> FrameSource::Open(const std::string& drive_dir, const std::string& camera,
+                                               bool allow_gaps) {
+  const std::string path = Find(drive_dir, camera);
+  if (path.empty()) throw Error(Str(drive_dir, ": no '", camera, "/' image folder or '", camera, ".<ext>' video"));
+  if (fs::is_directory(path)) return std::make_unique<ImageFolder>(path, allow_gaps);
+  return std::make_unique<VideoFile>(path);
 }
 
 CanLog ReadCanLog(const std::string& path, const CanLogFormat& f) {

@@ -27,6 +27,8 @@ class FrameSource {
   // between the first and last.
   static std::unique_ptr<FrameSource> Open(const std::string& drive_dir, const std::string& camera,
                                            bool allow_gaps = false);
+  // The path Open would read (the image folder, else the video); empty when the drive has neither.
+  static std::string Find(const std::string& drive_dir, const std::string& camera);
   virtual ~FrameSource() = default;
   // The next frame, or false at the end. Throws dps::Error naming an unreadable image.
   virtual bool Read(cv::Mat* image) = 0;
