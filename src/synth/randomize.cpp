@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
 
 #include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
 
 #include "dps/util/error.h"
 #include "dps/util/math.h"
@@ -225,6 +227,52 @@ void DrawObjects(const RandomizeOptions& o, RandomizedScene* r, Draws* d) {
   }
 }
 
+// The footprint of a box of length x width at a pose on the ground (x across, z along), as OpenCV's
+// rotated rectangle.
+cv::RotatedRect Footprint(const PlanarPose& p, double length_m, double width_m) {
+  return cv::RotatedRect(cv::Point2f(static_cast<float>(p.x_m), static_cast<float>(p.z_m)),
+                         cv::Size2f(static_cast<float>(width_m), static_cast<float>(length_m)),
+                         static_cast<float>(-p.heading_rad / kRadPerDeg));
+}
+
+// The first frame time at which an object of the story comes within clearance_m of the own car (its
+// footprint grown by that much on every side), or a negative time when it never does.
+double MeetsOwnCar(const Scene& s, const SceneObject& obj, double clearance_m) {
+  for (int f = 0; f < s.FrameCount(); ++f) {
+    const double t = s.FrameTime(f);
+    std::vector<cv::Point2f> overlap;
+    const cv::RotatedRect own =
+        Footprint(s.EgoPoseAt(t), s.rig.vehicle.length_m + 2 * clearance_m, s.rig.vehicle.width_m + 2 * clearance_m);
+    if (cv::rotatedRectangleIntersection(own, Footprint(obj.PoseAt(t), obj.length_m, obj.width_m), overlap) !=
+        cv::INTERSECT_NONE) {
+      return t;
+    }
+  }
+  return -1.0;
+}
+
+// Randomised speeds and shifts, and a car drawn as a longer vehicle, can close a story's gap to the
+// own car (a car following 6 m behind at a fifth more speed, a bus in the place of the car we queue
+// behind). Such an object is moved away from the own car along its heading, a quarter metre at a
+// time, until it keeps half a metre clear of it in every frame: every drive stays one a car could
+// have recorded. The distance moved is recorded (objectN.moved_m).
+void KeepClearOfOwnCar(RandomizedScene* r, Draws* d) {
+  constexpr double kClearance = 0.5, kStep = 0.25;
+  constexpr int kMaxSteps = 160;  // 40 m
+  for (SceneObject& obj : r->scene.objects) {
+    int steps = 0;
+    for (double t = MeetsOwnCar(r->scene, obj, kClearance); t >= 0 && steps < kMaxSteps;
+         t = MeetsOwnCar(r->scene, obj, kClearance), ++steps) {
+      const PlanarPose at = obj.PoseAt(t), own = r->scene.EgoPoseAt(t);
+      const Eigen::Vector2d axis(std::sin(obj.start.heading_rad), std::cos(obj.start.heading_rad));
+      const double away = axis.dot(Eigen::Vector2d(at.x_m - own.x_m, at.z_m - own.z_m)) >= 0 ? 1.0 : -1.0;
+      obj.start.x_m += away * kStep * axis.x();
+      obj.start.z_m += away * kStep * axis.y();
+    }
+    if (steps > 0) d->Record("object" + std::to_string(obj.id) + ".moved_m", steps * kStep);
+  }
+}
+
 // The road's outer edges (world x of the outer markings' centres); +-5 m without markings.
 std::pair<double, double> RoadEdges(const RoadMarkings& r) {
   if (!r.enabled) return {-5.0, 5.0};
@@ -384,6 +432,7 @@ RandomizedScene Randomize(const Scene& scene, std::uint64_t seed, const Randomiz
   DrawRig(options, &r, &d);
   DrawAppearance(options, &r, &d);
   DrawObjects(options, &r, &d);
+  KeepClearOfOwnCar(&r, &d);
   DrawDetail(&r, &d);
   DrawClutter(&r, &d);
   return r;
