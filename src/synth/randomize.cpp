@@ -261,13 +261,15 @@ void KeepClearOfOwnCar(RandomizedScene* r, Draws* d) {
   constexpr int kMaxSteps = 160;  // 40 m
   for (SceneObject& obj : r->scene.objects) {
     int steps = 0;
-    for (double t = MeetsOwnCar(r->scene, obj, kClearance); t >= 0 && steps < kMaxSteps;
-         t = MeetsOwnCar(r->scene, obj, kClearance), ++steps) {
+    double t = MeetsOwnCar(r->scene, obj, kClearance);
+    while (t >= 0 && steps < kMaxSteps) {
       const PlanarPose at = obj.PoseAt(t), own = r->scene.EgoPoseAt(t);
       const Eigen::Vector2d axis(std::sin(obj.start.heading_rad), std::cos(obj.start.heading_rad));
       const double away = axis.dot(Eigen::Vector2d(at.x_m - own.x_m, at.z_m - own.z_m)) >= 0 ? 1.0 : -1.0;
       obj.start.x_m += away * kStep * axis.x();
       obj.start.z_m += away * kStep * axis.y();
+      ++steps;
+      t = MeetsOwnCar(r->scene, obj, kClearance);
     }
     if (steps > 0) d->Record("object" + std::to_string(obj.id) + ".moved_m", steps * kStep);
   }
