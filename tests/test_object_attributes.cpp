@@ -43,6 +43,10 @@ void TestClasses() {
   // A kerb (0.15 m high) and a bridge deck 6 m up: neither.
   CHECK_EQ(ClassOf(5.0, 0.2, 0.15), std::string("unknown"));
   CHECK_EQ(ClassOf(8.0, 3.0, 6.0), std::string("unknown"));
+  // A wall beside the road, 8 m long and 1.2 m high: longer than any car, no higher than one; a
+  // van 6 m long, 2.5 m high, is still a vehicle.
+  CHECK_EQ(ClassOf(8.0, 0.3, 1.2), std::string("unknown"));
+  CHECK_EQ(ClassOf(6.0, 2.0, 2.5), std::string("vehicle"));
   // Names both ways.
   for (const char* name : {"unknown", "vehicle", "truck", "pedestrian", "pole"}) {
     CHECK(dps::ObjectClassFromName(name).has_value());

@@ -53,6 +53,8 @@ ObjectClass ClassifyObject(double length_m, double height_m, const ClassOptions&
     if (measured && height_m > o.person_max_height_m) return ObjectClass::kUnknown;
     return ObjectClass::kPedestrian;
   }
+  // Longer than any car yet no higher than one: no road user's shape (a wall, a fence, a hedge).
+  if (length_m > o.vehicle_max_length_m && measured && height_m <= o.vehicle_max_height_m) return ObjectClass::kUnknown;
   if (length_m > o.vehicle_max_length_m || (measured && height_m > o.vehicle_max_height_m)) return ObjectClass::kTruck;
   return ObjectClass::kVehicle;
 }

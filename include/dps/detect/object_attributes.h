@@ -42,6 +42,7 @@ struct ClassOptions {
   double person_max_height_m = 2.3;   // ... and the top at most this high
   double vehicle_max_length_m = 6.5;  // cars and vans: the larger extent at most this ...
   double vehicle_max_height_m = 2.6;  // ... and the top at most this high; beyond: truck or bus
+                                      // (longer but not higher: unknown, a wall or a fence)
   double truck_max_height_m = 4.5;    // higher tops: unknown (a bridge, a tree)
 
   // Throws dps::Error naming the field, its value and the violated constraint.
