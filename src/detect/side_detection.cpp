@@ -506,11 +506,15 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
       });
       if ((*farthest)->depth - (*nearest)->depth > options_.max_vehicle_width_m) continue;
     }
+    // The object's top above the road: three quarters of its columns reach at least this high. An
+    // obstacle's top stands min_obstacle_height_m above the road too (a kerb's or a road band's
+    // mismatch does not).
+    std::nth_element(tops.begin(), tops.begin() + tops.size() / 4, tops.end(), std::greater<double>());
+    const double top = tops[tops.size() / 4];
+    if (top < options_.min_obstacle_height_m) continue;
     for (const Contact* k : kept) r.obstacle.at<std::uint8_t>(k->y, k->x) = 255;
     Detection det = DetectionFromPoints(points, camera_.name);
-    // The object's top above the road: three quarters of its columns reach at least this high.
-    std::nth_element(tops.begin(), tops.begin() + tops.size() / 4, tops.end(), std::greater<double>());
-    det.height_m = tops[tops.size() / 4];
+    det.height_m = top;
     if (c.x_begin <= first_valid + margin) det.clipped_ends.push_back(points.front());
     if (c.x_end - 1 >= last_valid - margin) det.clipped_ends.push_back(points.back());
     det.id = id++;

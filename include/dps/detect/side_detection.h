@@ -54,8 +54,9 @@ struct SideDetectorOptions {
   // max_depth_m / f (the views' focal length f), where a static object as deep as the views keep
   // would shift less than min_motion_disparity_px (slow driving, high frame rates, coarse images).
   double min_baseline_m = 0.05;
-  // Components lower than this (median) are dropped, and with static_gate on, columns where the
-  // road beyond shows within this height above the contact; m.
+  // Components lower than this (median), or whose top (the height three quarters of their columns
+  // reach) is lower, are dropped, and with static_gate on, columns where the road beyond shows
+  // within this height above the contact; m.
   double min_obstacle_height_m = 0.5;
   // At speed the camera moves far between frames, and a static object beside the car has the
   // disparity f B / D (D: its distance from the camera across the view). To keep objects down to
