@@ -53,10 +53,12 @@ ObjectClass ClassifyObject(double length_m, double height_m, const ClassOptions&
     if (measured && height_m > o.person_max_height_m) return ObjectClass::kUnknown;
     return ObjectClass::kPedestrian;
   }
-  // Longer than any car yet no higher than one: no road user's shape (a wall, a fence, a hedge).
-  if (length_m > o.vehicle_max_length_m && measured && height_m <= o.vehicle_max_height_m) return ObjectClass::kUnknown;
-  if (length_m > o.vehicle_max_length_m || (measured && height_m > o.vehicle_max_height_m)) return ObjectClass::kTruck;
-  return ObjectClass::kVehicle;
+  // Longer than any car: a truck or bus, unless no higher than a car (a wall, a fence, a hedge: no
+  // road user's shape).
+  if (length_m > o.vehicle_max_length_m) {
+    return measured && height_m <= o.vehicle_max_height_m ? ObjectClass::kUnknown : ObjectClass::kTruck;
+  }
+  return measured && height_m > o.vehicle_max_height_m ? ObjectClass::kTruck : ObjectClass::kVehicle;
 }
 
 std::pair<double, double> FootprintExtents(const std::vector<Eigen::Vector2d>& points) {
