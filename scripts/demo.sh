@@ -16,7 +16,7 @@ mkdir -p "$OUT"
   --truth "$OUT/drives/$SCENE/truth.csv" --frames "$OUT/drives/$SCENE/frames.csv" \
   --lanes "$OUT/results/$SCENE/lanes.csv" --truth-lanes "$OUT/drives/$SCENE/truth_lanes.csv" \
   --ego-lane "$OUT/results/$SCENE/ego_lane.csv" --truth-ego-lane "$OUT/drives/$SCENE/truth_ego_lane.csv" \
-  --rig "$OUT/drives/$SCENE/rig.yaml" --json "$OUT/results/$SCENE/scores.json" | tee "$OUT/results/$SCENE/scores.txt"
+  --rig "$OUT/drives/$SCENE/rig.yaml" --masks "$OUT/drives/$SCENE/truth_masks" --json "$OUT/results/$SCENE/scores.json" | tee "$OUT/results/$SCENE/scores.txt"
 echo
 echo "Drive (synthetic, with truth):  $OUT/drives/$SCENE/"
 VIDEO="none (no encoder)"

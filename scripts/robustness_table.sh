@@ -40,7 +40,7 @@ for size in $SIZES; do
   for family in $FAMILIES; do
     for seed in $SEEDS; do
       drive="$WORK/$size/drives/${family}_$seed"
-      if [ ! -f "$drive/truth.csv" ]; then
+      if [ ! -f "$drive/truth.csv" ] || [ ! -d "$drive/truth_masks" ]; then
         "$T/dps-synth" "$ROOT/data/scenes/$family.yaml" --size "$size" --randomize "$seed" --out "$drive" --force --quiet
       fi
       drives+=("$drive")
@@ -90,7 +90,7 @@ for size in $SIZES; do
           lanes+=(--ego-lane "$out/ego_lane.csv" --truth-ego-lane "$drive/truth_ego_lane.csv")
       fi
       "$T/dps-eval" --detections "$out/detections.csv" --tracks "$out/tracks.csv" --truth "$drive/truth.csv" \
-        --frames "$drive/frames.csv" --rig "$drive/rig_true.yaml" ${lanes[@]+"${lanes[@]}"} --json "$WORK/$size/$name.json" >/dev/null
+        --frames "$drive/frames.csv" --rig "$drive/rig_true.yaml" --masks "$drive/truth_masks" ${lanes[@]+"${lanes[@]}"} --json "$WORK/$size/$name.json" >/dev/null
     else
       rm -f "$WORK/$size/$name.json"
     fi

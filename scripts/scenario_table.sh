@@ -19,7 +19,7 @@ for size in 640x480 320x240; do
     "$T/dps-process" "$drive" --out "$WORK/$size/out" --force --quiet --no-video
     for range in 20 50; do
       "$T/dps-eval" --detections "$WORK/$size/out/$scene/detections.csv" --truth "$drive/truth.csv" \
-        --rig "$drive/rig.yaml" --max-range "$range" --json "$WORK/$size/$scene.$range.json" >/dev/null
+        --rig "$drive/rig.yaml" --masks "$drive/truth_masks" --max-range "$range" --json "$WORK/$size/$scene.$range.json" >/dev/null
     done
     rows+=("$size $scene")
   done
@@ -32,7 +32,7 @@ for seed in 11 21; do
     "$T/dps-process" "$drive" --out "$WORK/seeds/out" --force --quiet --no-video
     "$T/dps-eval" --detections "$WORK/seeds/out/${scene}_$seed/detections.csv" \
       --tracks "$WORK/seeds/out/${scene}_$seed/tracks.csv" --truth "$drive/truth.csv" --rig "$drive/rig.yaml" \
-      --json "$WORK/seeds/${scene}_$seed.json" >/dev/null
+      --masks "$drive/truth_masks" --json "$WORK/seeds/${scene}_$seed.json" >/dev/null
     seeds+=("$scene $seed")
   done
 done

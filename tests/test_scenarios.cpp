@@ -21,6 +21,7 @@
 #include "check.h"
 #include "fixtures.h"
 #include "dps/camera/rig_io.h"
+#include "dps/camera/valid_mask.h"
 #include "dps/detect/detection.h"
 #include "dps/detect/detection_io.h"
 #include "dps/eval/evaluation.h"
@@ -60,7 +61,9 @@ Scored Run(const std::string& name) {
   const dps::Rig rig = dps::ReadRig(drive + "/rig.yaml");  // the rendering rig
   dps::EvaluationOptions eo;
   eo.max_range_m = 20.0;
-  eo.visibility = std::make_shared<const dps::Visibility>(rig);
+  dps::Rig seeing = rig;  // with what each camera sees past the own car (dps-synth's truth_masks)
+  for (dps::RigCamera& c : seeing.cameras) c.mask = dps::ReadCameraMask(drive + "/truth_masks/" + c.name + ".png", c.model);
+  eo.visibility = std::make_shared<const dps::Visibility>(seeing);
   Scored s;
   const std::vector<dps::TruthRow> truth = dps::ReadTruth(drive + "/truth.csv");
   const std::vector<dps::Detection> detections = dps::ReadDetections(out + "/" + name + "/detections.csv");

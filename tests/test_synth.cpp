@@ -126,6 +126,13 @@ void TestTruthVelocities(const std::string& name) {
   dps::Synthesize(scene, dir.string(), options);
   auto can = Columns((dir / "can.csv").string(), {"t", "speed", "yaw_rate"});
   auto truth = Columns((dir / "truth.csv").string(), {"frame", "t", "id", "x", "z", "vx", "vz"});
+  // Each camera's truth mask is written, the model's size.
+  for (const dps::RigCamera& c : scene.rig.cameras) {
+    const cv::Mat m = cv::imread((dir / "truth_masks" / (c.name + ".png")).string(), cv::IMREAD_UNCHANGED);
+    CHECK_EQ(m.cols, c.model.width());
+    CHECK_EQ(m.rows, c.model.height());
+    CHECK(cv::countNonZero(m) > 0);
+  }
   // Ego pose at each CAN sample.
   std::vector<double> ex{0}, ez{0}, eh{0};
   for (size_t i = 1; i < can["t"].size(); ++i) {
@@ -335,9 +342,27 @@ void TestSceneDetail() {
     CHECK_EQ(back.id, std::uint16_t{dps::kIdOwnCar});
     CHECK_NEAR(back.distance_m, 0.04, 1e-9);
   }
-  // Without the detail (the shipped look) the same rays meet the road and the open air.
+  // The truth masks: the pixel looking straight back sees the housing, not the world; one looking
+  // out and down at the road beside the camera sees the world; without the housing, straight
+  // back is the world again.
   dps::Scene plain = Load("empty_road");
   const dps::SceneRenderer plain_renderer(plain);
+  for (size_t i = 0; i < s.rig.cameras.size(); ++i) {
+    const dps::RigCamera& c = s.rig.cameras[i];
+    const double out = c.vehicle_from_camera.t.x() < 0 ? -1.0 : 1.0;
+    Eigen::Vector2d back, beside;
+    CHECK(c.model.Project(c.vehicle_from_camera.R.transpose() * Eigen::Vector3d(0.0, 0.02, -1.0), &back));
+    CHECK(c.model.Project(c.vehicle_from_camera.R.transpose() * Eigen::Vector3d(out, 1.0, 0.0), &beside));
+    const auto at = [](const cv::Mat& m, const Eigen::Vector2d& p) {
+      return m.at<std::uint8_t>(static_cast<int>(std::lround(p.y())), static_cast<int>(std::lround(p.x())));
+    };
+    const cv::Mat mask = renderer.WorldMask(i), plain_mask = plain_renderer.WorldMask(i);
+    CHECK_EQ(mask.type(), CV_8U);
+    CHECK_EQ(at(mask, back), 0);
+    CHECK_EQ(at(mask, beside), 255);
+    CHECK_EQ(at(plain_mask, back), 255);
+  }
+  // Without the detail (the shipped look) the same rays meet the road and the open air.
   const dps::FrameState plain_st = plain_renderer.StateAt(0.0);
   CHECK_EQ(plain_renderer.Cast(plain_st, eye, (Eigen::Vector3d(kerb_x + 1.0, 0.0, 9.0) - eye).normalized()).id,
            std::uint16_t{dps::kIdGround});

@@ -154,6 +154,19 @@ SceneRenderer::SceneRenderer(const Scene& scene) : scene_(scene) {
   }
 }
 
+cv::Mat SceneRenderer::WorldMask(size_t camera_index) const {
+  const CameraRays& r = rays_.at(camera_index);
+  cv::Mat mask(r.height, r.width, CV_8U);
+  for (int v = 0; v < r.height; ++v) {
+    for (int u = 0; u < r.width; ++u) {
+      const size_t first = (static_cast<size_t>(v) * r.width + u) * (samples_ + 1);
+      const bool sees = !std::isnan(r.dirs[first].x()) && std::isinf(r.own_car_t[first]);
+      mask.at<std::uint8_t>(v, u) = sees ? 255 : 0;
+    }
+  }
+  return mask;
+}
+
 FrameState SceneRenderer::StateAt(double t_s) const {
   FrameState st;
   st.t_s = t_s;

@@ -278,6 +278,14 @@ void Synthesize(const Scene& scene_in, const std::string& out_dir, const SynthOp
     }
     frames_csv.Commit();
     WriteTruth(truth, (tmp / "truth.csv").string());
+    if (!calibration) {
+      // What each camera sees of the world past the own car: dps-eval --masks (visibility).
+      fs::create_directories(tmp / "truth_masks");
+      for (size_t c = 0; c < scene.rig.cameras.size(); ++c) {
+        const std::string path = (tmp / "truth_masks" / (scene.rig.cameras[c].name + ".png")).string();
+        if (!cv::imwrite(path, renderer.WorldMask(c))) throw Error(Str(out_dir, ": cannot write ", path));
+      }
+    }
     if (!calibration && scene.road.enabled) {
       LaneTruth lanes = LaneTruthOf(scene);
       // The rendered frames only (--frames may cut the drive short).

@@ -86,6 +86,11 @@ class SceneRenderer {
   RayHit Cast(const FrameState& state, const Eigen::Vector3d& origin_vehicle,
               const Eigen::Vector3d& dir_vehicle) const;
 
+  // Which pixels of camera `camera_index` see the world (CV_8U, 255): those whose centre ray the
+  // camera model has and that do not meet the own car (body, cabin, sill, mirror housings).
+  // dps-synth writes it as the drive's truth_masks/<camera>.png, for dps-eval's visibility.
+  cv::Mat WorldMask(size_t camera_index) const;
+
   const Scene& scene() const { return scene_; }
 
  private:
