@@ -42,6 +42,9 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --remember            also report the obstacles the occupancy grid remembers where no view looks
                         this frame (parked cars, poles, walls passed: behind the car and in the
                         wedges between the views) as detections of the side they are on
+  --rear                also look behind the mirrors: each camera's rear view against its earlier
+                        frames, obstacles where they meet the road (docs/detection.md; experimental:
+                        more false detections than found ones on the tuning drives)
   --truncate            left and right differ: process the frame numbers both have
                         (image folders pair by file number; videos by position)
   --allow-gaps          a frame lost in recording - a number missing in an image folder, or
@@ -106,7 +109,7 @@ int main(int argc, char** argv) {
                              {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
                               "yaw-scale", "time-column", "yaw-file", "mask-seconds", "grid-every", "extrinsic-seconds"},
                              {"force", "map-png", "no-video", "truncate", "allow-gaps", "quiet", "diagnostics", "no-mask-estimate",
-                              "no-extrinsic-correction", "remember"});
+                              "no-extrinsic-correction", "remember", "rear"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -130,6 +133,7 @@ int main(int argc, char** argv) {
     options.grid_every = args.Integer("grid-every", 0);
     if (options.grid_every < 0) throw dps::Error("option --grid-every: expected >= 0");
     options.grid_obstacles = args.Has("remember");
+    options.rear = args.Has("rear");
     options.truncate = args.Has("truncate");
     options.allow_frame_gaps = args.Has("allow-gaps");
     options.estimate_masks = !args.Has("no-mask-estimate");

@@ -1,5 +1,6 @@
 #include "dps/detect/coverage.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "dps/util/math.h"
@@ -22,6 +23,21 @@ bool Coverage::Contains(const Eigen::Vector2d& p) const {
     if (s.Contains(p)) return true;
   }
   return false;
+}
+
+Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
+                         double x_hi) {
+  const auto bearing = [&](double x) {
+    const Eigen::Vector3d ray = view.vehicle_from_view * Eigen::Vector3d((x - view.cx) / view.focal_px, 0.0, 1.0);
+    return Eigen::Vector2d(ray.x(), ray.z()).normalized();
+  };
+  const Eigen::Vector2d a = bearing(x_lo), b = bearing(x_hi), mid = a + b;
+  Sector s;
+  s.name = name;
+  s.apex = apex;
+  s.direction_rad = std::atan2(mid.x(), mid.y());
+  s.half_angle_rad = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) / 2;
+  return s;
 }
 
 }  // namespace dps

@@ -352,6 +352,16 @@ class PictureOutputs {
                     DrawDiagnostics("right", out.right.reference_view, out.right.other_view, out.right.disparity,
                                     out.right.histogram, out.right.obstacle, sd0, sd1, panel)},
                 all);
+    if (po.rears) {
+      // The rear views: current and warped earlier view, their composite, what is not road (white)
+      // and the contacts (grey).
+      cv::hconcat(std::vector<cv::Mat>{all,
+                                       DrawDiagnostics("left rear", out.left_rear.view, out.left_rear.warped, {}, {},
+                                                       out.left_rear.obstacle, 0, 1, panel),
+                                       DrawDiagnostics("right rear", out.right_rear.view, out.right_rear.warped, {},
+                                                       {}, out.right_rear.obstacle, 0, 1, panel)},
+                  all);
+    }
     if (!diagnostics_.isOpened()) {
       diagnostics_.open(diagnostics_tmp_, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, all.size());
       if (!diagnostics_.isOpened()) throw Error(Str(output_dir_, ": cannot open a video writer for diagnostics"));
@@ -409,6 +419,7 @@ class PictureOutputs {
 // to correct and only adds its noise: it is off.
 PipelineOptions DrivePipelineOptions(const DriveOptions& o, const Rig& rig, const DriveSummary& s) {
   PipelineOptions p = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
+  if (o.default_pipeline) p.rears = o.rear;
   bool verified = true;
   for (const char* camera : {"left", "right"}) {
     const auto it = s.extrinsics.find(camera);

@@ -70,7 +70,8 @@ PipelineOptions DefaultPipelineOptions(const Rig& rig) {
   o.side.contact_trim_rows = block >= 9 ? 2 : 0;  // side_detection.h
   o.front.view_width = o.side.view_width = w;
   o.front.view_height = o.side.view_height = h;
-  o.front.focal_px = o.side.focal_px = 170.0 * s;
+  o.front.focal_px = o.side.focal_px = o.rear.focal_px = 170.0 * s;
+  o.rear.window_px = block >= 9 ? 7 : 5;
   return o;
 }
 
@@ -96,6 +97,12 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
       c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last));
     }
   }
+  if (o.rears) {
+    for (const auto& [name, side, at] : {std::make_tuple("left", Side::kLeft, l), std::make_tuple("right", Side::kRight, r)}) {
+      const ViewSpec view = RearViewSpec(rig, name, side, o.rear);
+      c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, 0, view.width - 1));
+    }
+  }
   return c;
 }
 
@@ -106,6 +113,7 @@ void PipelineOptions::Check() const {
   Require(vehicle_width_m >= 0, "vehicle_width_m", vehicle_width_m, ">= 0");
   front.Check();
   side.Check();
+  rear.Check();
   lane.Check();
   lane_tracking.Check();
   classes.Check();
@@ -127,6 +135,10 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
   if (options.sides) {
     left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
     right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
+  }
+  if (options.rears) {
+    left_rear_ = std::make_unique<RearDetector>(rig, "left", Side::kLeft, options.rear);
+    right_rear_ = std::make_unique<RearDetector>(rig, "right", Side::kRight, options.rear);
   }
   if (options.lanes) lanes_ = std::make_unique<LaneDetector>(rig, options.lane);
   if (options.lanes && options.track_lanes) lane_tracker_ = std::make_unique<LaneTracker>(options.lane_tracking);
@@ -173,6 +185,13 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
     tasks.push_back([&] { out.left = left_->Detect(previous_left_, grey[0], in.current_in_previous, dt, continuing); });
     tasks.push_back([&] { out.right = right_->Detect(previous_right_, grey[1], in.current_in_previous, dt, continuing); });
   }
+  if (left_rear_) {
+    const PlanarPose* motion = in.motion_known ? &in.current_in_previous : nullptr;
+    tasks.push_back([&, motion] {
+      out.left_rear = left_rear_->Detect(grey[0], motion, in.t_s);
+      out.right_rear = right_rear_->Detect(grey[1], motion, in.t_s);
+    });
+  }
   if (lanes_) {
     tasks.push_back([&] {
       out.lanes = lanes_->Detect(grey[0], grey[1]);
@@ -182,7 +201,8 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
   const std::vector<double> task_ms = RunTasks(tasks);
   front_->CombineReferences(&out.front);
   out.front_ms = front_views_ms + task_ms[0] + task_ms[1];
-  const size_t sides_end = tasks.size() - (lanes_ ? 1 : 0);
+  const size_t sides_end = tasks.size() - (lanes_ ? 1 : 0) - (left_rear_ ? 1 : 0);
+  out.rears_ms = left_rear_ ? task_ms[tasks.size() - (lanes_ ? 2 : 1)] : 0.0;
   out.sides_ms = sides ? task_ms[sides_end - 2] + task_ms[sides_end - 1] : 0.0;
   out.lanes_ms = lanes_ ? task_ms.back() : 0.0;
   out.detect_ms = ms(t0, now());
@@ -195,6 +215,11 @@ void SurroundPipeline::Collect(const FrameInput& in, bool sides, const cv::Mat g
   out->coverage.sectors.push_back(coverage_.sectors.front());
   for (const SideResult* s : {&out->left, &out->right}) {
     if (!sides || s->skipped) continue;
+    out->coverage.sectors.push_back(s->sector);
+    for (const Detection& d : s->detections) out->detections.push_back(d);
+  }
+  for (const RearResult* s : {&out->left_rear, &out->right_rear}) {
+    if (!left_rear_ || s->skipped) continue;
     out->coverage.sectors.push_back(s->sector);
     for (const Detection& d : s->detections) out->detections.push_back(d);
   }

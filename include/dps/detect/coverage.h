@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 
+#include "dps/stereo/virtual_view.h"
+
 namespace dps {
 
 struct Sector {
@@ -28,5 +30,10 @@ struct Coverage {
   std::vector<Sector> sectors;  // empty = everything
   bool Contains(const Eigen::Vector2d& point) const;
 };
+
+// The sector, from `apex` on the ground (vehicle frame), of a view's columns [x_lo, x_hi] (its
+// bearings at the principal row), named `name`.
+Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
+                         double x_hi);
 
 }  // namespace dps

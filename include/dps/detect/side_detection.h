@@ -132,10 +132,6 @@ struct SideResult {
   std::vector<Detection> detections;   // source = the camera's name
 };
 
-// The sector, from `apex` on the ground (vehicle frame), of a view's columns [x_lo, x_hi] (its
-// bearings at the principal row), named `name`.
-Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
-                         double x_hi);
 // The columns [first, last] of a side view `width` pixels wide that motion stereo matches with
 // these stereo options (the left side's view is matched mirrored).
 std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions& stereo);

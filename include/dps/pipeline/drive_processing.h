@@ -36,6 +36,9 @@ struct DriveOptions {
   // the views) reported as detections (grid_obstacles.h; off by default: docs/detection.md).
   bool grid_obstacles = false;
   GridObstacleOptions grid_obstacle;
+  // Each camera's rear view against its earlier frames (rear_detection.h; off by default:
+  // docs/detection.md). Sets PipelineOptions::rears of the default pipeline.
+  bool rear = false;
   bool truncate = false;          // left and right with different frames: keep the frame numbers both have
   // frames.csv with two consecutive frames more than max_frame_gap intervals (its median) apart -
   // a frame lost in recording - is an error naming them, unless allow_frame_gaps: then a warning,

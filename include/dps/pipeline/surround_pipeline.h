@@ -16,6 +16,7 @@
 #include "dps/detect/lane_detection.h"
 #include "dps/detect/lane_tracking.h"
 #include "dps/detect/object_attributes.h"
+#include "dps/detect/rear_detection.h"
 #include "dps/detect/side_detection.h"
 
 namespace dps {
@@ -24,6 +25,10 @@ struct PipelineOptions {
   FrontDetectorOptions front;
   SideDetectorOptions side;
   bool sides = true;           // run motion stereo on the side views
+  RearDetectorOptions rear;
+  // Look behind the mirrors with each camera's rear view (rear_detection.h). Off by default: it
+  // adds more false detections than it finds (docs/detection.md).
+  bool rears = false;
   LaneDetectorOptions lane;
   bool lanes = true;           // find the lane markings beside the car (lane_detection.h)
   LaneTrackerOptions lane_tracking;
@@ -68,6 +73,7 @@ struct FrameOutput {
   std::vector<Detection> detections;  // all sources, frame and t filled in
   FrontResult front;
   SideResult left, right;
+  RearResult left_rear, right_rear;
   LaneFrame lanes;             // the lane boundaries and the ego's lane position (frame, t unset)
   std::vector<std::string> warnings;
   // What this frame processed: the front pair's sector and each side's matched columns (none for a
@@ -75,7 +81,7 @@ struct FrameOutput {
   Coverage coverage;
   // Time spent per stage: the front pair's and both side pairs' work (the sources run
   // concurrently, so these may add up to more than detect_ms, their wall time).
-  double front_ms = 0.0, sides_ms = 0.0, lanes_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
+  double front_ms = 0.0, sides_ms = 0.0, rears_ms = 0.0, lanes_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
 };
 
 class SurroundPipeline {
@@ -104,6 +110,7 @@ class SurroundPipeline {
   std::map<std::string, Eigen::Vector2d> viewpoints_;
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<SideDetector> left_, right_;
+  std::unique_ptr<RearDetector> left_rear_, right_rear_;
   std::unique_ptr<LaneDetector> lanes_;
   std::unique_ptr<LaneTracker> lane_tracker_;
   cv::Mat previous_left_, previous_right_;  // the previous frame's omni images, grey
