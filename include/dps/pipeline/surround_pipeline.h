@@ -79,8 +79,8 @@ struct FrameOutput {
   // What this frame processed: the front pair's sector and each side's matched columns (none for a
   // side skipped); the occupancy grid marks free space only there.
   Coverage coverage;
-  // Time spent per stage: the front pair's and both side pairs' work (the sources run
-  // concurrently, so these may add up to more than detect_ms, their wall time).
+  // Time spent per stage: the front pair's, both side pairs' and both rear views' work (the
+  // sources run concurrently, so these may add up to more than detect_ms, their wall time).
   double front_ms = 0.0, sides_ms = 0.0, rears_ms = 0.0, lanes_ms = 0.0, detect_ms = 0.0;  // detect_ms includes `alongside`
 };
 
