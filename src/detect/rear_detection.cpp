@@ -53,7 +53,6 @@ ViewSpec RearViewSpec(const Rig& rig, const std::string& camera, Side side, cons
 
 RearDetector::RearDetector(const Rig& rig, const std::string& camera, Side side, const RearDetectorOptions& options)
     : camera_(rig.Camera(camera)),
-      side_(side),
       options_((options.Check(), options)),
       view_(camera_, RearViewSpec(rig, camera, side, options)) {
   const ViewSpec& s = view_.spec();

@@ -108,7 +108,6 @@ class RearDetector {
   cv::Mat WarpEarlier(const Earlier& earlier, cv::Mat* invalid) const;
 
   RigCamera camera_;
-  Side side_;
   RearDetectorOptions options_;
   VirtualView view_;
   cv::Mat ignore_;      // CV_8U: own car or no source, dilated by half a window
