@@ -79,23 +79,35 @@ RearDetector::RearDetector(const Rig& rig, const std::string& camera, Side side,
 
 namespace {
 
-// Zero-mean normalised cross-correlation of every window of a and b (CV_32F), and a's and b's
-// standard deviations.
-void WindowZncc(const cv::Mat& a, const cv::Mat& b, int window, cv::Mat* zncc, cv::Mat* sd_a, cv::Mat* sd_b) {
+// A view's window means and standard deviations, computed once for every image it is compared
+// with (as plane_sweep.cpp's Reference).
+struct WindowStats {
+  cv::Mat image, mean, sd;  // CV_32F
+};
+
+WindowStats MakeWindowStats(const cv::Mat& image, int window) {
   const cv::Size w(window, window);
-  cv::Mat ma, mb, maa, mbb, mab;
-  cv::boxFilter(a, ma, CV_32F, w);
-  cv::boxFilter(b, mb, CV_32F, w);
-  cv::boxFilter(a.mul(a), maa, CV_32F, w);
-  cv::boxFilter(b.mul(b), mbb, CV_32F, w);
-  cv::boxFilter(a.mul(b), mab, CV_32F, w);
-  cv::Mat va = maa - ma.mul(ma), vb = mbb - mb.mul(mb), cab = mab - ma.mul(mb);
-  cv::max(va, 0.0, va);
-  cv::max(vb, 0.0, vb);
-  cv::sqrt(va, *sd_a);
-  cv::sqrt(vb, *sd_b);
-  cv::Mat denominator = sd_a->mul(*sd_b) + 1e-6f;
+  WindowStats st;
+  image.convertTo(st.image, CV_32F);
+  cv::Mat squares;
+  cv::boxFilter(st.image, st.mean, CV_32F, w);
+  cv::boxFilter(st.image.mul(st.image), squares, CV_32F, w);
+  cv::Mat variance = squares - st.mean.mul(st.mean);
+  cv::max(variance, 0.0, variance);
+  cv::sqrt(variance, st.sd);
+  return st;
+}
+
+// Zero-mean normalised cross-correlation of every window of `a` with b's, and b's standard
+// deviations.
+void WindowZncc(const WindowStats& a, const cv::Mat& b, int window, cv::Mat* zncc, cv::Mat* sd_b) {
+  const WindowStats sb = MakeWindowStats(b, window);
+  cv::Mat mab;
+  cv::boxFilter(a.image.mul(sb.image), mab, CV_32F, cv::Size(window, window));
+  const cv::Mat cab = mab - a.mean.mul(sb.mean);
+  cv::Mat denominator = a.sd.mul(sb.sd) + 1e-6f;
   cv::divide(cab, denominator, *zncc);
+  *sd_b = sb.sd;
 }
 
 }  // namespace
@@ -154,9 +166,9 @@ RearResult RearDetector::Detect(const cv::Mat& omni, const PlanarPose* current_i
     cv::Mat bad, image, zncc, sd;
   };
   std::vector<Warp> warps;
-  cv::Mat cur;
-  r.view.convertTo(cur, CV_32F);
-  cv::Mat sd_cur;
+  const WindowStats current = MakeWindowStats(r.view, o.window_px);
+  const cv::Mat& cur = current.image;
+  const cv::Mat& sd_cur = current.sd;
   for (const Earlier& e : history_) {
     Warp w;
     const Eigen::Vector3d d = e.current_in_earlier.ToPose3().Apply(t) - t;
@@ -165,7 +177,7 @@ RearResult RearDetector::Detect(const cv::Mat& omni, const PlanarPose* current_i
     cv::Mat invalid;
     WarpEarlier(e, &invalid).convertTo(w.image, CV_32F);
     cv::dilate(ignore_ | invalid, w.bad, square);
-    WindowZncc(cur, w.image, o.window_px, &w.zncc, &sd_cur, &w.sd);
+    WindowZncc(current, w.image, o.window_px, &w.zncc, &w.sd);
     warps.push_back(std::move(w));
   }
   if (warps.size() < 2) {
@@ -178,9 +190,8 @@ RearResult RearDetector::Detect(const cv::Mat& omni, const PlanarPose* current_i
   // What holds still in the view while the road moves: the own car (a mirror housing's edge, the
   // body's flank) or something keeping pace with it exactly. The current view against the oldest
   // earlier one as it is (no warp).
-  cv::Mat oldest, still, sd_still;
-  history_.back().view.convertTo(oldest, CV_32F);
-  WindowZncc(cur, oldest, o.window_px, &still, &sd_cur, &sd_still);
+  cv::Mat still, sd_still;
+  WindowZncc(current, history_.back().view, o.window_px, &still, &sd_still);
   warps.front().image.convertTo(r.warped, CV_8U);
   // Per pixel, the two warps it is judged against (-1: none).
   cv::Mat pick(s.height, s.width, CV_32SC2, cv::Scalar(-1, -1));
