@@ -140,6 +140,7 @@ for size in sizes:
             for z in d.get("zones", []):
                 row["zone_" + z["band"]] = z["recall"] if z["objects"] else None
             row["kinds"] = {k["band"]: (k["objects"], k["matched_objects"]) for k in d.get("kinds", [])}
+            row["false_causes"] = {s["source"]: s.get("false_causes", {}) for s in d.get("sources", [])}
             for attribute in ("classes", "lanes"):
                 a = d.get(attribute) or {}
                 row[attribute] = (a.get("correct", 0), a.get("judged", 0))
@@ -223,6 +224,21 @@ for size in sizes:
         if family.startswith("empty"): continue
         g = [r for r in group if r["family"] == family]
         print(f"| {family} | {stats(g, 'zone_front')} | {stats(g, 'zone_side')} | {stats(g, 'zone_rear')} |")
+    print()
+    print("False detections within 20 m by what they are (dps-eval's causes, pooled over the family's")
+    print("drives; front pair / left camera / right camera): a duplicate of an object another detection")
+    print("matched, misplaced near an object none matched (within twice the matching distance), or a")
+    print("phantom with no object near:\n")
+    print("| family | false detections | duplicate | misplaced | phantom |")
+    print("| --- | --- | --- | --- | --- |")
+    for family in families:
+        g = [r for r in group if r["family"] == family and not r["failed"]]
+        cells = []
+        for cause in ("duplicate", "misplaced", "phantom"):
+            n = [sum(r.get("false_causes", {}).get(src, {}).get(cause, 0) for r in g) for src in ("front", "left", "right")]
+            cells.append(f"{sum(n)} ({n[0]} / {n[1]} / {n[2]})")
+        total = sum(int(c.split()[0]) for c in cells)
+        print(f"| {family} | {total} | {cells[0]} | {cells[1]} | {cells[2]} |")
     print()
     kinds = sorted({k for r in group if not r["failed"] for k in r.get("kinds", {})})
     if kinds:

@@ -347,6 +347,20 @@ void TestEvaluation() {
   CHECK_NEAR(r.overall.Recall(), 1.0, 0);
   CHECK_NEAR(r.overall.Precision(), 0.5, 0);
   CHECK_EQ(r.bands[0].objects, 2);  // both near points within 10 m
+  // The false ones: (6, 5) near nothing (a phantom); the side car's second part a duplicate of
+  // the side car (id 3), 0.1 m from its footprint.
+  CHECK_EQ(r.false_causes[static_cast<int>(dps::FalseCause::kPhantom)], 1);
+  CHECK_EQ(r.false_causes[static_cast<int>(dps::FalseCause::kDuplicate)], 1);
+  CHECK_EQ(r.false_causes[static_cast<int>(dps::FalseCause::kMisplaced)], 0);
+  CHECK_EQ(r.sources[1].source, std::string("left"));
+  CHECK_EQ(r.sources[1].false_causes[static_cast<int>(dps::FalseCause::kDuplicate)], 1);
+  for (const dps::ScoringError& e : r.errors) {
+    if (e.missed) continue;
+    CHECK_EQ(e.near_object_id, e.cause == dps::FalseCause::kDuplicate ? 3 : -1);
+    if (e.cause == dps::FalseCause::kDuplicate) CHECK_NEAR(e.near_object_m, 0.1, 1e-9);
+  }
+  CHECK(dps::EvaluationJson(r).find("\"false_causes\": {\"duplicate\": 1, \"misplaced\": 0, \"phantom\": 1}") !=
+        std::string::npos);
   // Range errors: the side car takes the detection inside its footprint (distance 0 beats 0.1):
   // |range(-3.2, 0.6) - 3.1|; the car |range(0.3, 7.6) - 7.75|.
   std::vector<double> errors = r.overall.range_errors_m;
@@ -405,20 +419,26 @@ void TestEvaluation() {
   CHECK_EQ(r.overall.objects, 1);
   CHECK_EQ(r.overall.matched_objects, 1);
   CHECK_EQ(r.overall.detections, 0);
-  CHECK(dps::ScoringErrorsCsv(r) == "frame,error,id,kind,x,z,range\n");
+  CHECK(dps::ScoringErrorsCsv(r) == "frame,error,id,kind,x,z,range,cause,near_id,near_m\n");
   r = dps::Evaluate({det(0.2, 20.3, "front"), det(0.1, 18.9, "front")}, {edge}, dps::EvaluationOptions{});
   CHECK_EQ(r.overall.matched_objects, 1);
   CHECK_EQ(r.overall.detections, 1);
   CHECK_EQ(r.overall.matched_detections, 1);
   CHECK_NEAR(r.overall.range_errors_m.at(0), std::abs(std::hypot(0.1, 18.9) - 19.5), 1e-9);
   // Detections more than the tolerance away do not match; the error list names the missed car
-  // (id 1, near point (0, 7.75)) and the false detection (front, (2, 7)).
+  // (id 1, near point (0, 7.75)) and the false detection (front, (2, 7)): the car misplaced, 1.1 m
+  // beside and 0.75 m before its footprint (1.331 m, within twice its 0.775 m tolerance). 2 m
+  // farther out, nothing is near it.
   r = dps::Evaluate({det(2.0, 7.0, "front")}, {car}, dps::EvaluationOptions{});
   CHECK_EQ(r.overall.matched_objects, 0);
   CHECK(dps::EvaluationJson(r).find("\"recall\": 0.0000") != std::string::npos);
-  CHECK_EQ(dps::ScoringErrorsCsv(r), std::string("frame,error,id,kind,x,z,range\n"
-                                                 "0,missed,1,car,0.000,7.750,7.750\n"
-                                                 "0,false,-1,front,2.000,7.000,7.280\n"));
+  CHECK_EQ(dps::ScoringErrorsCsv(r), std::string("frame,error,id,kind,x,z,range,cause,near_id,near_m\n"
+                                                 "0,missed,1,car,0.000,7.750,7.750,,,\n"
+                                                 "0,false,-1,front,2.000,7.000,7.280,misplaced,1,1.331\n"));
+  r = dps::Evaluate({det(4.0, 7.0, "front")}, {car}, dps::EvaluationOptions{});
+  CHECK_EQ(r.false_causes[static_cast<int>(dps::FalseCause::kPhantom)], 1);
+  CHECK(dps::EvaluationTable(r).find("0 duplicate (a second detection of a found object), 0 misplaced") !=
+        std::string::npos);
   // An empty road of 10 frames with a false detection in frame 3 (and one 30 m out in frame 5):
   // without the drive's frame count only the frames with detections are known; with it, 1 of 10
   // frames has a detection in the zone.

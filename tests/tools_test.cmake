@@ -110,7 +110,7 @@ if(NOT EXISTS "${WORK}/scores.json")
   message(FATAL_ERROR "dps-eval wrote no --json file")
 endif()
 file(READ "${WORK}/errors.csv" errors)
-if(NOT errors MATCHES "^frame,error,id,kind,x,z,range\n")
+if(NOT errors MATCHES "^frame,error,id,kind,x,z,range,cause,near_id,near_m\n")
   message(FATAL_ERROR "dps-eval --errors wrote no error list: ${errors}")
 endif()
 # --force redoes a complete drive; --list adds drives from a file; --shard I/N takes every N-th

@@ -59,10 +59,14 @@ pedestrian, cyclist, motorbike: pedestrian; pole, post: pole; others: unknown).
                       changes found within 0.3 s (same direction) and invented
   --json FILE         also write the scores as JSON (with lanes: {"detections", "tracks", "lanes"})
   --errors FILE       also write each scoring error as CSV, to see what went wrong where:
-                      frame,error,id,kind,x,z,range — "missed" (a counted object no detection
-                      matched: its id, kind and near point) or "false" (a detection in the zone
-                      that matched no object: id -1, its source as kind, its point); of the
-                      detections, or of the tracks when only --tracks is given
+                      frame,error,id,kind,x,z,range,cause,near_id,near_m — "missed" (a counted
+                      object no detection matched: its id, kind and near point) or "false" (a
+                      detection in the zone that matched no object: id -1, its source as kind,
+                      its point, and what it is by the nearest object within twice the matching
+                      distance: "duplicate" of an object another detection matched, "misplaced"
+                      near one none matched, with that object's id and distance, or "phantom"
+                      with nothing near); of the detections, or of the tracks when only --tracks
+                      is given. The table and the JSON count the false detections by cause
   --help              this text
 )";
 

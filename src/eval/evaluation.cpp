@@ -22,6 +22,9 @@ std::string Number(double v, int digits = 3) {
   return buf;
 }
 
+// The matching distance of an object (DESIGN.md §5).
+double MatchTolerance(const TruthRow& object) { return std::max(0.75, 0.1 * NearPoint(object).norm()); }
+
 // Matches objects with the detections not taken yet (det_object[j] < 0): pairs within
 // max(0.75 m, 0.1 * range of the near point) of the footprint, nearest first, each object and
 // each detection at most once. Sets det_object[j] to the index of detection j's object and
@@ -34,7 +37,7 @@ std::vector<int> MatchNearestFirst(const std::vector<const TruthRow*>& objects, 
   };
   std::vector<Pair> pairs;
   for (size_t i = 0; i < objects.size(); ++i) {
-    const double tolerance = std::max(0.75, 0.1 * NearPoint(*objects[i]).norm());
+    const double tolerance = MatchTolerance(*objects[i]);
     for (size_t j = 0; j < dets.size(); ++j) {
       if ((*det_object)[j] >= 0) continue;
       const double d = DistanceToFootprint(*objects[i], {dets[j]->x_m, dets[j]->z_m});
@@ -201,6 +204,27 @@ void ScoreAttributes(const Detection& d, const TruthRow& object, const std::vect
   }
 }
 
+// A false detection's cause (FalseCause): the nearest of the frame's objects within twice its
+// matching distance, and whether a detection (in the zone or not) matched it.
+void FalseCauseOf(const FrameMatch& m, const Detection& d, ScoringError* e) {
+  std::vector<bool> found_uncounted(m.uncounted.size(), false);
+  for (size_t j = 0; j < m.dets.size(); ++j) {
+    if (m.det_match[j] < 0 && m.det_seen[j] >= 0) found_uncounted[m.det_seen[j]] = true;
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < m.objects.size() + m.uncounted.size(); ++k) {
+    const bool counted = k < m.objects.size();
+    const TruthRow& object = counted ? *m.objects[k] : *m.uncounted[k - m.objects.size()];
+    const double distance = DistanceToFootprint(object, {d.x_m, d.z_m});
+    if (distance > 2 * MatchTolerance(object) || distance >= best) continue;
+    best = distance;
+    const bool found = counted ? m.matched_by[k] != nullptr : found_uncounted[k - m.objects.size()];
+    e->cause = found ? FalseCause::kDuplicate : FalseCause::kMisplaced;
+    e->near_object_id = object.id;
+    e->near_object_m = distance;
+  }
+}
+
 // Precision of the detections in the zone, overall, by band and zone (of their object's near
 // point, or their own point when false) and by source; the matches' attributes.
 void ScoreDetections(int f, const FrameMatch& m, double vehicle_length_m, const std::vector<LaneBoundaryRow>* lanes,
@@ -216,10 +240,15 @@ void ScoreDetections(int f, const FrameMatch& m, double vehicle_length_m, const 
       ++b->detections;
       b->matched_detections += m.det_seen[j] >= 0;
     }
-    if (m.det_seen[j] < 0) result->errors.push_back({f, false, -1, d.source, {d.x_m, d.z_m}, d.range_m});
     SourceScore* s = SourceOf(result, d.source);
     ++s->detections;
     s->matched += m.det_seen[j] >= 0;
+    if (m.det_seen[j] >= 0) continue;
+    ScoringError e{f, false, -1, d.source, {d.x_m, d.z_m}, d.range_m};
+    FalseCauseOf(m, d, &e);
+    ++s->false_causes[static_cast<int>(e.cause)];
+    ++result->false_causes[static_cast<int>(e.cause)];
+    result->errors.push_back(e);
   }
 }
 
@@ -274,6 +303,15 @@ std::string ExpectedClass(const std::string& kind) {
   return "unknown";
 }
 
+const char* FalseCauseName(FalseCause cause) {
+  switch (cause) {
+    case FalseCause::kDuplicate: return "duplicate";
+    case FalseCause::kMisplaced: return "misplaced";
+    case FalseCause::kPhantom: break;
+  }
+  return "phantom";
+}
+
 double SourceScore::Precision() const { return detections ? double(matched) / detections : 1.0; }
 
 EvaluationResult Evaluate(const std::vector<Detection>& detections, const std::vector<TruthRow>& truth,
@@ -311,10 +349,8 @@ TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std:
   for (size_t i = 0; i < truth.size(); ++i) {
     if (!counted[i]) continue;
     const TruthRow& t = truth[i];
-    const Eigen::Vector2d near = NearPoint(t);
-    const double tolerance = std::max(0.75, 0.1 * near.norm());
     const Detection* best = nullptr;
-    double best_d = tolerance;
+    double best_d = MatchTolerance(t);
     for (const Detection* d : by_frame[t.frame]) {
       const double dist = DistanceToFootprint(t, {d->x_m, d->z_m});
       if (dist <= best_d) best_d = dist, best = d;
@@ -363,6 +399,9 @@ std::string EvaluationTable(const EvaluationResult& r) {
                   s.detections ? Number(s.Precision()).c_str() : "-");
     out << buf;
   }
+  out << "false detections: " << r.false_causes[0] << " duplicate (a second detection of a found object), "
+      << r.false_causes[1] << " misplaced (near an object none found), " << r.false_causes[2]
+      << " phantom (no object near)\n";
   out << "frames " << r.frames << ", with a detection in the zone " << r.frames_with_detections << "\n";
   if (r.classes.judged) {
     out << "class right for " << r.classes.correct << " of " << r.classes.judged << " matches ("
@@ -379,6 +418,17 @@ std::string EvaluationTable(const EvaluationResult& r) {
   }
   return out.str();
 }
+
+namespace {
+// {"duplicate": n, "misplaced": n, "phantom": n}
+std::string CausesJson(const std::array<int, kFalseCauses>& causes) {
+  std::string out = "{";
+  for (int c = 0; c < kFalseCauses; ++c) {
+    out += Str(c ? ", " : "", "\"", FalseCauseName(static_cast<FalseCause>(c)), "\": ", causes[c]);
+  }
+  return out + "}";
+}
+}  // namespace
 
 std::string EvaluationJson(const EvaluationResult& r) {
   std::ostringstream out;
@@ -412,9 +462,11 @@ std::string EvaluationJson(const EvaluationResult& r) {
   for (size_t i = 0; i < r.sources.size(); ++i) {
     const SourceScore& s = r.sources[i];
     out << (i ? ", " : "") << "{\"source\": \"" << s.source << "\", \"detections\": " << s.detections
-        << ", \"matched\": " << s.matched << ", \"precision\": " << Number(s.Precision(), 4) << "}";
+        << ", \"matched\": " << s.matched << ", \"precision\": " << Number(s.Precision(), 4)
+        << ", \"false_causes\": " << CausesJson(s.false_causes) << "}";
   }
-  out << "],\n  \"frames\": " << r.frames << ",\n  \"frames_with_detections\": " << r.frames_with_detections;
+  out << "],\n  \"false_causes\": " << CausesJson(r.false_causes);
+  out << ",\n  \"frames\": " << r.frames << ",\n  \"frames_with_detections\": " << r.frames_with_detections;
   for (const auto& [name, a] : {std::make_pair("classes", &r.classes), std::make_pair("lanes", &r.lanes)}) {
     out << ",\n  \"" << name << "\": {\"judged\": " << a->judged << ", \"correct\": " << a->correct
         << ", \"accuracy\": " << Number(a->Accuracy(), 4) << "}";
@@ -438,10 +490,18 @@ std::string EvaluationJson(const EvaluationResult& r) {
 
 std::string ScoringErrorsCsv(const EvaluationResult& r) {
   std::ostringstream out;
-  out << "frame,error,id,kind,x,z,range\n";
+  out << "frame,error,id,kind,x,z,range,cause,near_id,near_m\n";
   for (const ScoringError& e : r.errors) {
     out << e.frame << ',' << (e.missed ? "missed" : "false") << ',' << e.object_id << ',' << e.kind << ','
-        << Number(e.point.x()) << ',' << Number(e.point.y()) << ',' << Number(e.range_m) << '\n';
+        << Number(e.point.x()) << ',' << Number(e.point.y()) << ',' << Number(e.range_m) << ',';
+    if (!e.missed) {
+      out << FalseCauseName(e.cause) << ',';
+      if (e.near_object_id >= 0) out << e.near_object_id << ',' << Number(e.near_object_m);
+      else out << ',';
+    } else {
+      out << ",,";
+    }
+    out << '\n';
   }
   return out.str();
 }

@@ -20,6 +20,8 @@
 
 #pragma once
 
+#include <array>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -65,6 +67,15 @@ struct AttributeScore {
 // else (a wall) -> unknown.
 std::string ExpectedClass(const std::string& kind);
 
+// What a false detection is, by the frame's objects (counted or not) within twice the matching
+// distance of it (max(0.75 m, 0.1 x the object's range), DESIGN.md §5), the nearest: a second
+// detection of an object another detection matched (kDuplicate: a part of one object, or one object
+// seen by two sources, not merged); an object no detection matched (kMisplaced: found but put
+// beyond the matching distance); none (kPhantom: nothing there).
+enum class FalseCause { kDuplicate, kMisplaced, kPhantom };
+const char* FalseCauseName(FalseCause cause);  // "duplicate", "misplaced", "phantom"
+constexpr int kFalseCauses = 3;
+
 struct BandScore {
   std::string name;            // "0-10", ...
   double lo_m = 0, hi_m = 0;
@@ -84,6 +95,7 @@ struct BandScore {
 struct SourceScore {
   std::string source;
   int detections = 0, matched = 0;  // in the zone
+  std::array<int, kFalseCauses> false_causes{};  // the false ones by FalseCause
   double Precision() const;
 };
 
@@ -96,6 +108,11 @@ struct ScoringError {
   std::string kind;           // missed: the truth kind; false: the detection's source
   Eigen::Vector2d point{0, 0};  // missed: the near point; false: the detection's (x, z)
   double range_m = 0.0;
+  // False detections: what it is, and the object that says so (its truth id and the distance from
+  // the detection's point to its footprint; -1 and NaN for a phantom).
+  FalseCause cause = FalseCause::kPhantom;
+  int near_object_id = -1;
+  double near_object_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct EvaluationResult {
@@ -108,6 +125,7 @@ struct EvaluationResult {
   int frames = 0;                    // frames with truth rows or detections (and the options' frame_count)
   int frames_with_detections = 0;    // frames with at least one detection in the zone
   std::vector<ScoringError> errors;  // by frame: missed objects, then false detections
+  std::array<int, kFalseCauses> false_causes{};  // the false detections in the zone by FalseCause
   // The counted objects' matches in the zone: their class (those with a class; right when it is
   // ExpectedClass of the object's kind) and their lane (those whose object has a lane in
   // options.truth_lanes; right when the detection's lane is the object's).
@@ -142,8 +160,9 @@ TrackEvaluation EvaluateTracks(const std::vector<TrackState>& tracks, const std:
 // A table for people (per band and per source) and a JSON document for scripts.
 std::string EvaluationTable(const EvaluationResult& result);
 std::string EvaluationJson(const EvaluationResult& result);
-// The scoring errors as CSV: frame,error,id,kind,x,z,range (error "missed" with the object's id,
-// kind and near point, or "false" with the detection's source as kind, id -1, and its point).
+// The scoring errors as CSV: frame,error,id,kind,x,z,range,cause,near_id,near_m (error "missed"
+// with the object's id, kind and near point, the last three empty; or "false" with the detection's
+// source as kind, id -1, its point, its FalseCause and the object behind it, empty for a phantom).
 std::string ScoringErrorsCsv(const EvaluationResult& result);
 
 }  // namespace dps

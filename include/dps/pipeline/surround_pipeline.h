@@ -48,9 +48,9 @@ struct PipelineOptions {
 };
 
 // Options scaled to the rig's image size: at 640 px wide omni images, 400x200 views with a focal
-// length of 170 px (about the omni image's own resolution near the horizon), 64 disparities and
+// length of 170 px (about the omni image's own resolution near the horizon), 96 disparities and
 // 9x9 windows; proportionally smaller views, ranges (multiples of 16) and windows for smaller
-// images (e.g. 200x100, f = 85 px, 32 disparities, 7x7 at the paper's 320x240).
+// images (e.g. 200x100, f = 85 px, 48 disparities, 7x7 at the paper's 320x240).
 PipelineOptions DefaultPipelineOptions(const Rig& rig);
 
 // The ground sectors the pipeline processes (for the map and for dps-eval's field of view): the
