@@ -233,12 +233,10 @@ for size in sizes:
     print("| --- | --- | --- | --- | --- |")
     for family in families:
         g = [r for r in group if r["family"] == family and not r["failed"]]
-        cells = []
-        for cause in ("duplicate", "misplaced", "phantom"):
-            n = [sum(r.get("false_causes", {}).get(src, {}).get(cause, 0) for r in g) for src in ("front", "left", "right")]
-            cells.append(f"{sum(n)} ({n[0]} / {n[1]} / {n[2]})")
-        total = sum(int(c.split()[0]) for c in cells)
-        print(f"| {family} | {total} | {cells[0]} | {cells[1]} | {cells[2]} |")
+        counts = [[sum(r.get("false_causes", {}).get(src, {}).get(cause, 0) for r in g) for src in ("front", "left", "right")]
+                  for cause in ("duplicate", "misplaced", "phantom")]
+        cells = [f"{sum(n)} ({n[0]} / {n[1]} / {n[2]})" for n in counts]
+        print(f"| {family} | {sum(map(sum, counts))} | {cells[0]} | {cells[1]} | {cells[2]} |")
     print()
     kinds = sorted({k for r in group if not r["failed"] for k in r.get("kinds", {})})
     if kinds:

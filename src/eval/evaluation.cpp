@@ -138,6 +138,7 @@ struct FrameMatch {
   std::vector<int> det_match;                 // detection j's counted object, -1: none
   std::vector<int> det_seen;                  // >= 0: detection j saw an object, counted or not
   std::vector<const Detection*> matched_by;   // counted object i's detection (in the zone or not)
+  std::vector<bool> uncounted_seen;           // uncounted object k is what a detection in the zone saw
 };
 
 void Match(FrameMatch* m) {
@@ -156,6 +157,10 @@ void Match(FrameMatch* m) {
   // Then the detections left over against the uncounted objects.
   m->det_seen = m->det_match;
   MatchNearestFirst(m->uncounted, m->dets, &m->det_seen);
+  m->uncounted_seen.assign(m->uncounted.size(), false);
+  for (size_t j = 0; j < m->dets.size(); ++j) {
+    if (m->det_match[j] < 0 && m->det_seen[j] >= 0) m->uncounted_seen[m->det_seen[j]] = true;
+  }
   m->matched_by.assign(m->objects.size(), nullptr);
   for (size_t i = 0; i < m->objects.size(); ++i) {
     if (object_match[i] >= 0) m->matched_by[i] = m->dets[object_match[i]];
@@ -207,10 +212,6 @@ void ScoreAttributes(const Detection& d, const TruthRow& object, const std::vect
 // A false detection's cause (FalseCause): the nearest of the frame's objects within twice its
 // matching distance, and whether a detection (in the zone or not) matched it.
 void FalseCauseOf(const FrameMatch& m, const Detection& d, ScoringError* e) {
-  std::vector<bool> found_uncounted(m.uncounted.size(), false);
-  for (size_t j = 0; j < m.dets.size(); ++j) {
-    if (m.det_match[j] < 0 && m.det_seen[j] >= 0) found_uncounted[m.det_seen[j]] = true;
-  }
   double best = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < m.objects.size() + m.uncounted.size(); ++k) {
     const bool counted = k < m.objects.size();
@@ -218,7 +219,7 @@ void FalseCauseOf(const FrameMatch& m, const Detection& d, ScoringError* e) {
     const double distance = DistanceToFootprint(object, {d.x_m, d.z_m});
     if (distance > 2 * MatchTolerance(object) || distance >= best) continue;
     best = distance;
-    const bool found = counted ? m.matched_by[k] != nullptr : found_uncounted[k - m.objects.size()];
+    const bool found = counted ? m.matched_by[k] != nullptr : m.uncounted_seen[k - m.objects.size()];
     e->cause = found ? FalseCause::kDuplicate : FalseCause::kMisplaced;
     e->near_object_id = object.id;
     e->near_object_m = distance;
