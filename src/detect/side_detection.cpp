@@ -56,7 +56,9 @@ double Median(std::vector<double> v) {
 struct Contact {
   int x = 0, y = 0;
   Eigen::Vector2d ground{0, 0};
-  double depth = 0.0, disparity = 0.0, height = 0.0, top = 0.0, row_depth = 0.0;
+  // top: the column's top above the road less half a window (the matcher's fattening); reach: the
+  // topmost matched pixel's height as it is.
+  double depth = 0.0, disparity = 0.0, height = 0.0, top = 0.0, reach = 0.0, row_depth = 0.0;
   bool solid = true;
 };
 
@@ -152,6 +154,13 @@ bool SolidAboveContact(const ContactSearch& s, int x, int lowest, double depth, 
   return true;
 }
 
+// The value that three quarters of `values` reach at least (reorders them).
+double UpperQuartile(std::vector<double>* values) {
+  const auto q = values->begin() + values->size() / 4;
+  std::nth_element(values->begin(), q, values->end(), std::greater<double>());
+  return *q;
+}
+
 // A component's contacts with the road, one per column where it has one.
 std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramComponent& c) {
   const SideDetectorOptions& o = s.options;
@@ -207,6 +216,7 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
     k.top = std::max(0, contact - top - o.stereo.block_height / 2) * k.depth / spec.focal_px;
+    k.reach = std::max(0, contact - top) * k.depth / spec.focal_px;
     contacts.push_back(k);
   }
   return contacts;
@@ -273,7 +283,8 @@ void SideDetectorOptions::Check() const {
 
 SideDetector::SideDetector(const Rig& rig, const std::string& camera, Side side,
                            const SideDetectorOptions& options)
-    : camera_(rig.Camera(camera)), side_(side), vehicle_(rig.vehicle), options_(options) {
+    : camera_(rig.Camera(camera)), side_(side), vehicle_(rig.vehicle), options_(options),
+      camera_height_m_(-camera_.vehicle_from_camera.t.y()) {
   options.Check();
   options_.histogram.min_disparity = options.stereo.min_disparity;
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
@@ -463,7 +474,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
     contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
     std::vector<Eigen::Vector2d> points;
-    std::vector<double> heights, tops, disparities;
+    std::vector<double> heights, tops, reaches, disparities;
     std::vector<const Contact*> kept;
     // The height test over all the component's columns: the columns that are not solid are its low
     // ones, and without them low components (road, kerbs) would pass it.
@@ -471,6 +482,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
       tops.push_back(k.top);
+      reaches.push_back(k.reach);
       if (k.solid) solid.push_back(k);
     }
     for (const Contact& k : solid) {
@@ -494,9 +506,9 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     // The object's top above the road: three quarters of its columns reach at least this high. An
     // obstacle's top stands min_obstacle_height_m above the road too (a kerb's or a road band's
     // mismatch does not).
-    std::nth_element(tops.begin(), tops.begin() + tops.size() / 4, tops.end(), std::greater<double>());
-    const double top = tops[tops.size() / 4];
+    const double top = UpperQuartile(&tops);
     if (top < options_.min_obstacle_height_m) continue;
+    if (pacing && options_.pacing_above_camera && UpperQuartile(&reaches) <= camera_height_m_) continue;
     for (const Contact* k : kept) r.obstacle.at<std::uint8_t>(k->y, k->x) = 255;
     Detection det = DetectionFromPoints(points, camera_.name);
     det.height_m = top;

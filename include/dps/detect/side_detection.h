@@ -110,6 +110,13 @@ struct SideDetectorOptions {
   // 2.55 m wide). A band of road or verge that the matcher left at zero disparity spans metres.
   // m; 0 = no test.
   double max_vehicle_width_m = 2.6;
+  // Something keeping pace with us stands up into the view above the horizon, the camera's height at
+  // every distance: its topmost matched pixels (three quarters of its columns reach at least as
+  // high) lie above the camera, while a band of road or verge lies on the road and ends below the
+  // horizon. Road vehicles stand taller than a camera in a side mirror; a car lower than the camera
+  // that keeps exactly our speed is lost with this test (from one pair of frames it is the same
+  // picture as such a band).
+  bool pacing_above_camera = true;
 
   SideDetectorOptions();
   // Throws dps::Error naming the field, its value and the violated constraint (the stereo and
@@ -167,6 +174,7 @@ class SideDetector {
   Side side_;
   Vehicle vehicle_;
   SideDetectorOptions options_;
+  double camera_height_m_;  // above the road
   // Per view (by yaw grid index): pixels to ignore (no source, own car) and the inverse depth of
   // the road along the view axis (0 where there is no road); the road's disparity is f B times it.
   struct ViewGeometry {
