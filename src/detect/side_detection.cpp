@@ -47,18 +47,16 @@ double Median(std::vector<double> v) {
 
 // One column of a component: where it meets the road (view pixel and ground point), its depth
 // along the view axis (a static object's from its disparity too: StaticDepth), its disparity, its
-// height (the rows it fills with its disparity) and its top's height above the road (the highest
-// of those rows, less the half window the matcher carries the object's disparity above its top
-// edge); row_depth: the depth of its lowest pixel's ground point alone, which max_depth_m limits.
+// height (the rows it fills with its disparity) and its reach, the highest of those rows' height
+// above the road as matched (TopOf leaves out the matcher's fattening); row_depth: the depth of its
+// lowest pixel's ground point alone, which max_depth_m limits.
 // solid: the column shows the object, not the road beyond, above the contact (SolidAboveContact;
 // tested with static_gate on only); a column that is not solid still counts for the component's
 // height, but gives no point.
 struct Contact {
   int x = 0, y = 0;
   Eigen::Vector2d ground{0, 0};
-  // top: the column's top above the road less half a window (the matcher's fattening); reach: the
-  // topmost matched pixel's height as it is.
-  double depth = 0.0, disparity = 0.0, height = 0.0, top = 0.0, reach = 0.0, row_depth = 0.0;
+  double depth = 0.0, disparity = 0.0, height = 0.0, reach = 0.0, row_depth = 0.0;
   bool solid = true;
 };
 
@@ -154,6 +152,12 @@ bool SolidAboveContact(const ContactSearch& s, int x, int lowest, double depth, 
   return true;
 }
 
+// A column's top above the road: its reach less the half window by which the matcher carries an
+// object's disparity above its top edge.
+double TopOf(const Contact& k, int block_height, double focal_px) {
+  return std::max(0.0, k.reach - block_height / 2 * k.depth / focal_px);
+}
+
 // The value that three quarters of `values` reach at least (reorders them).
 double UpperQuartile(std::vector<double>* values) {
   const auto q = values->begin() + values->size() / 4;
@@ -215,7 +219,6 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     k.solid = o.static_gate <= 0 || SolidAboveContact(s, x, lowest, k.depth, disparity);
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
-    k.top = std::max(0, contact - top - o.stereo.block_height / 2) * k.depth / spec.focal_px;
     k.reach = std::max(0, contact - top) * k.depth / spec.focal_px;
     contacts.push_back(k);
   }
@@ -481,7 +484,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     std::vector<Contact> solid;
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
-      tops.push_back(k.top);
+      tops.push_back(TopOf(k, options_.stereo.block_height, spec.focal_px));
       reaches.push_back(k.reach);
       if (k.solid) solid.push_back(k);
     }
