@@ -165,6 +165,16 @@ double UpperQuartile(std::vector<double>* values) {
   return *q;
 }
 
+// Whether a pixel with the component's disparity belongs to the object: where it sees the road,
+// only when it stands out from the road's disparity by the full score ramp (score 1). Road pixels
+// near the object's depth share its disparity bins (at slow speed the road's whole disparity range
+// may form one component; the windows carry an object's disparity onto the road below its foot),
+// and as members they became contacts on the road. Above the horizon nothing is road: any pixel
+// that scores counts (an object keeping pace has about the background's disparity there).
+bool Member(float score, float road_disparity) {
+  return std::isfinite(road_disparity) ? score >= 1.0f : score > 0.0f;
+}
+
 // A component's contacts with the road, one per column where it has one.
 std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramComponent& c) {
   const SideDetectorOptions& o = s.options;
@@ -176,7 +186,7 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     int top = -1, bottom = -1, rows = 0;
     for (int y = 0; y < spec.height; ++y) {
       const float v = s.disparity.at<float>(y, x);
-      if (!std::isfinite(v) || s.score.at<float>(y, x) <= 0) continue;
+      if (!std::isfinite(v) || !Member(s.score.at<float>(y, x), s.road.at<float>(y, x))) continue;
       const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
       if (bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label) {
         if (top < 0) top = y;
