@@ -166,13 +166,10 @@ double UpperQuartile(std::vector<double>* values) {
 }
 
 // Whether a pixel with the component's disparity belongs to the object: where it sees the road,
-// only when it stands out from the road's disparity by the full score ramp (score 1). Road pixels
-// near the object's depth share its disparity bins (at slow speed the road's whole disparity range
-// may form one component; the windows carry an object's disparity onto the road below its foot),
-// and as members they became contacts on the road. Above the horizon nothing is road: any pixel
-// that scores counts (an object keeping pace has about the background's disparity there).
-bool Member(float score, float road_disparity) {
-  return std::isfinite(road_disparity) ? score >= 1.0f : score > 0.0f;
+// only when it stands out from the road's disparity (SideDetectorOptions::member_min_score). Above
+// the horizon nothing is road: any pixel that scores counts.
+bool Member(float score, float road_disparity, double min_score) {
+  return score > 0.0f && (!std::isfinite(road_disparity) || score >= min_score);
 }
 
 // A component's contacts with the road, one per column where it has one.
@@ -186,7 +183,7 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     int top = -1, bottom = -1, rows = 0;
     for (int y = 0; y < spec.height; ++y) {
       const float v = s.disparity.at<float>(y, x);
-      if (!std::isfinite(v) || !Member(s.score.at<float>(y, x), s.road.at<float>(y, x))) continue;
+      if (!std::isfinite(v) || !Member(s.score.at<float>(y, x), s.road.at<float>(y, x), o.member_min_score)) continue;
       const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
       if (bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label) {
         if (top < 0) top = y;
@@ -287,6 +284,7 @@ void SideDetectorOptions::Check() const {
   Require(max_contact_jump_m > 0, "max_contact_jump_m", max_contact_jump_m, "> 0");
   Require(disparity_sigma_px > 0, "disparity_sigma_px", disparity_sigma_px, "> 0");
   Require(static_gate >= 0, "static_gate", static_gate, ">= 0 (0 = placed by the contact alone)");
+  Require(member_min_score >= 0 && member_min_score <= 1, "member_min_score", member_min_score, "in [0, 1]");
   Require(max_gap_below_m >= 0, "max_gap_below_m", max_gap_below_m, ">= 0");
   Require(contact_tolerance_px >= 0, "contact_tolerance_px", contact_tolerance_px, ">= 0");
   Require(contact_trim_rows >= 0 && contact_trim_rows < view_height, "contact_trim_rows", contact_trim_rows, "0 <= rows < view_height");

@@ -83,6 +83,14 @@ struct SideDetectorOptions {
   // With it on, columns past an object's end give no point (SolidAboveContact). >= 0; 0 = every
   // contact placed by its row alone.
   double static_gate = 2.0;
+  // A pixel with a component's disparity that sees the road is a member of the component (its
+  // bottom-most member is the contact) only when its score (eq. 14: its disparity's distance from
+  // the road's, over the ramp) is at least this. Road pixels near an object's depth share its
+  // disparity bins (the windows carry its disparity onto the road around its foot; at slow speed
+  // the road's whole disparity range can form one component) and, as members, put contacts on the
+  // road. Above the horizon any pixel that scores is a member (an object keeping pace has about the
+  // background's disparity there). A fraction of the ramp, [0, 1]; 1: the full ramp.
+  double member_min_score = 1.0;
   // Below the bottom-most matched pixel, pixels with no disparity (up to max_gap_below_m at the
   // object's depth) or with the object's disparity (within contact_tolerance_px) still count as
   // the object: the contact with the road is the lowest of them.
