@@ -7,7 +7,8 @@
 // us have less, overtaking ones negative disparity, hence a disparity range shifted below zero
 // (the paper's fixed offset). The road's disparity at every pixel follows from the geometry; the
 // score counts distance from it in either direction. Column histograms give the components;
-// each component's pixels are traced back in the disparity image and, per column, the
+// each component's pixels are traced back in the disparity image (where a pixel sees the road,
+// only if it stands out from the road's disparity: member_min_score) and, per column, the
 // bottom-most one is taken as the object's contact with the ground: its ray meets the road
 // plane (eq. 17-18, from the real view geometry); optionally, where that agrees with the depth a
 // static object at its disparity has, the two are combined (static_gate), and a column where the
