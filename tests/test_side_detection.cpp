@@ -351,6 +351,42 @@ void TestPacingRight() {
   CHECK_EQ(untested.Detect(images[0], images[1], step, dt).detections.size(), size_t{1});
 }
 
+// The battery's drive of data/scenes/NAME.yaml at 640x480 with randomisation `seed`, its first
+// `frames` frames written to root/drive as dps-synth writes them; `ego` (optional) replaces the
+// drive's speed and yaw-rate profile. Returns the randomised scene.
+dps::RandomizedScene SynthesizeRandomized(const std::string& name, int seed, int frames,
+                                          const std::filesystem::path& root, const dps::MotionProfile* ego = nullptr) {
+  const std::string path = dps_test::kSource + "/data/scenes/" + name + ".yaml";
+  dps::Scene scene = dps::ReadScene(path);
+  dps::ResizeScene(&scene, 640, 480);
+  dps::RandomizedScene r = dps::Randomize(scene, seed, dps::ReadRandomizeOptions(path));
+  if (ego) r.scene.ego = *ego;
+  dps::SynthOptions so;
+  so.frames = frames;
+  so.processing_rig = r.processing_rig;
+  so.write_video = r.video;
+  so.write_png = !r.video;
+  if (r.video) so.video_codec = r.video_codec;
+  dps::Synthesize(r.scene, (root / "drive").string(), so);
+  return r;
+}
+
+// Processes root/drive with `pipeline` into root/out_name; its side detections within 20 m.
+size_t SideDetections(const std::filesystem::path& root, const std::string& out_name,
+                      const dps::PipelineOptions& pipeline) {
+  dps::DriveOptions o;
+  o.map_video = false;
+  o.default_pipeline = false;
+  o.pipeline = pipeline;
+  const std::filesystem::path out = root / out_name;
+  dps::ProcessDrive((root / "drive").string(), out.string(), o);
+  size_t side = 0;
+  for (const dps::Detection& d : dps::ReadDetections((out / "drive" / "detections.csv").string())) {
+    side += d.source != "front" && d.range_m <= 20.0;
+  }
+  return side;
+}
+
 // The lead-car drive of the battery's tuning seed 4 at 640x480 (dps-synth --randomize 4: H.264
 // video, a 0.16 m kerb with a raised pavement and a gravel verge), its first 20 frames: nothing
 // stands beside the car within the side views' reach (the lead car is ahead, a wall 45 m away), so
@@ -360,20 +396,9 @@ void TestPacingRight() {
 // road, below the camera's height (pacing_above_camera). Each test alone leaves fewer of them than
 // neither; both together none.
 void TestVergeKeepingPace() {
-  namespace fs = std::filesystem;
-  const std::string path = dps_test::kSource + "/data/scenes/lead_car.yaml";
-  dps::Scene scene = dps::ReadScene(path);
-  dps::ResizeScene(&scene, 640, 480);
-  const dps::RandomizedScene r = dps::Randomize(scene, 4, dps::ReadRandomizeOptions(path));
+  const std::filesystem::path root = dps_test::ScratchDir("dps_test_verge_keeping_pace");
+  const dps::RandomizedScene r = SynthesizeRandomized("lead_car", 4, 20, root);
   CHECK(r.video && r.scene.render.kerb_height_m > 0);  // the drive described above
-  const fs::path root = dps_test::ScratchDir("dps_test_verge_keeping_pace");
-  dps::SynthOptions so;
-  so.frames = 20;
-  so.processing_rig = r.processing_rig;
-  so.write_video = r.video;
-  so.write_png = !r.video;
-  so.video_codec = r.video_codec;
-  dps::Synthesize(r.scene, (root / "drive").string(), so);
   struct Variant {
     const char* name;
     bool width, above;
@@ -382,17 +407,10 @@ void TestVergeKeepingPace() {
   Variant variants[] = {{"both tests", true, true}, {"the width test only", true, false},
                         {"the height test only", false, true}, {"neither", false, false}};
   for (Variant& v : variants) {
-    dps::DriveOptions o;
-    o.map_video = false;
-    o.default_pipeline = false;
-    o.pipeline = dps::DefaultPipelineOptions(r.processing_rig);
-    if (!v.width) o.pipeline.side.max_vehicle_width_m = 0.0;
-    o.pipeline.side.pacing_above_camera = v.above;
-    const fs::path out = root / v.name;
-    dps::ProcessDrive((root / "drive").string(), out.string(), o);
-    for (const dps::Detection& d : dps::ReadDetections((out / "drive" / "detections.csv").string())) {
-      v.side += d.source != "front" && d.range_m <= 20.0;
-    }
+    dps::PipelineOptions pipeline = dps::DefaultPipelineOptions(r.processing_rig);
+    if (!v.width) pipeline.side.max_vehicle_width_m = 0.0;
+    pipeline.side.pacing_above_camera = v.above;
+    v.side = SideDetections(root, v.name, pipeline);
     std::printf("kerb and verge beside the road, 20 frames, %s: %zu false side detection(s)\n", v.name, v.side);
   }
   CHECK_EQ(variants[0].side, size_t{0});
@@ -408,34 +426,15 @@ void TestVergeKeepingPace() {
 // full ramp (the default), fewer. (Neither reaches the target of no detection on an empty road:
 // docs/robustness.md.)
 void TestSlowEmptyRoad() {
-  namespace fs = std::filesystem;
-  const std::string path = dps_test::kSource + "/data/scenes/empty_road.yaml";
+  const dps::MotionProfile slow({dps::MotionSample{0.0, 2.0, 0.0}});
   size_t side[2] = {0, 0};  // default, member_min_score 0
   for (const int seed : {1, 2, 3, 4}) {
-    dps::Scene scene = dps::ReadScene(path);
-    dps::ResizeScene(&scene, 640, 480);
-    dps::RandomizedScene r = dps::Randomize(scene, seed, dps::ReadRandomizeOptions(path));
-    r.scene.ego = dps::MotionProfile({dps::MotionSample{0.0, 2.0, 0.0}});
-    const fs::path root = dps_test::ScratchDir("dps_test_slow_empty_road");
-    dps::SynthOptions so;
-    so.frames = 12;
-    so.processing_rig = r.processing_rig;
-    so.write_video = r.video;
-    so.write_png = !r.video;
-    if (r.video) so.video_codec = r.video_codec;
-    dps::Synthesize(r.scene, (root / "drive").string(), so);
-    for (const int variant : {0, 1}) {
-      dps::DriveOptions o;
-      o.map_video = false;
-      o.default_pipeline = false;
-      o.pipeline = dps::DefaultPipelineOptions(r.processing_rig);
-      if (variant == 1) o.pipeline.side.member_min_score = 0.0;
-      const fs::path out = root / (variant == 0 ? "default" : "any");
-      dps::ProcessDrive((root / "drive").string(), out.string(), o);
-      for (const dps::Detection& d : dps::ReadDetections((out / "drive" / "detections.csv").string())) {
-        side[variant] += d.source != "front" && d.range_m <= 20.0;
-      }
-    }
+    const std::filesystem::path root = dps_test::ScratchDir("dps_test_slow_empty_road");
+    const dps::RandomizedScene r = SynthesizeRandomized("empty_road", seed, 12, root, &slow);
+    dps::PipelineOptions pipeline = dps::DefaultPipelineOptions(r.processing_rig);
+    side[0] += SideDetections(root, "default", pipeline);
+    pipeline.side.member_min_score = 0.0;
+    side[1] += SideDetections(root, "any", pipeline);
   }
   std::printf("empty roads at 2 m/s, 4 x 12 frames: %zu side detection(s) with members off the road by the full "
               "ramp, %zu with any scored pixel a member\n", side[0], side[1]);
