@@ -48,15 +48,16 @@ double Median(std::vector<double> v) {
 // One column of a component: where it meets the road (view pixel and ground point), its depth
 // along the view axis (a static object's from its disparity too: StaticDepth), its disparity, its
 // height (the rows it fills with its disparity) and its reach, the highest of those rows' height
-// above the road as matched (TopOf leaves out the matcher's fattening); row_depth: the depth of its
-// lowest pixel's ground point alone, which max_depth_m limits.
+// above the road as matched (TopOf leaves out the matcher's fattening); standing: the height above
+// the road that the column reaches standing up from its contact (ConnectedTop); row_depth: the depth
+// of its lowest pixel's ground point alone, which max_depth_m limits.
 // solid: the column shows the object, not the road beyond, above the contact (SolidAboveContact;
 // tested with static_gate on only); a column that is not solid still counts for the component's
 // height, but gives no point.
 struct Contact {
   int x = 0, y = 0;
   Eigen::Vector2d ground{0, 0};
-  double depth = 0.0, disparity = 0.0, height = 0.0, reach = 0.0, row_depth = 0.0;
+  double depth = 0.0, disparity = 0.0, height = 0.0, reach = 0.0, standing = 0.0, row_depth = 0.0;
   bool solid = true;
 };
 
@@ -152,6 +153,28 @@ bool SolidAboveContact(const ContactSearch& s, int x, int lowest, double depth, 
   return true;
 }
 
+// The topmost row that a column's object reaches standing up from its bottom-most member `bottom`:
+// upwards through pixels at the object's disparity (members, or within contact_tolerance_px of
+// `disparity`: the component's neighbouring bins) and through pixels without a disparity (an
+// untextured body; at most max_gap_px of them running); a pixel matched at any other disparity ends
+// it. A band of road that the matcher left at zero disparity joins the sky above the horizon,
+// also at zero disparity, in one histogram component, but not through the rows between them.
+int ConnectedTop(const cv::Mat& disparity_image, int x, int bottom, double disparity, double tolerance_px,
+                 int max_gap_px, const std::function<bool(int)>& member) {
+  int top = bottom, gap = 0;
+  for (int y = bottom - 1; y >= 0; --y) {
+    const float v = disparity_image.at<float>(y, x);
+    if (!std::isfinite(v)) {
+      if (++gap > max_gap_px) break;
+      continue;
+    }
+    if (!member(y) && !(std::abs(v - disparity) <= tolerance_px)) break;
+    top = y;
+    gap = 0;
+  }
+  return top;
+}
+
 // A column's top above the road: its reach less the half window by which the matcher carries an
 // object's disparity above its top edge.
 double TopOf(const Contact& k, int block_height, double focal_px) {
@@ -181,11 +204,14 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
   for (int x = c.x_begin; x < c.x_end; ++x) {
     // The component's pixels in this column; the bottom-most is the contact with the road.
     int top = -1, bottom = -1, rows = 0;
-    for (int y = 0; y < spec.height; ++y) {
+    const auto member = [&](int y) {
       const float v = s.disparity.at<float>(y, x);
-      if (!std::isfinite(v) || !Member(s.score.at<float>(y, x), s.road.at<float>(y, x), o.member_min_score)) continue;
+      if (!std::isfinite(v) || !Member(s.score.at<float>(y, x), s.road.at<float>(y, x), o.member_min_score)) return false;
       const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
-      if (bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label) {
+      return bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label;
+    };
+    for (int y = 0; y < spec.height; ++y) {
+      if (member(y)) {
         if (top < 0) top = y;
         bottom = y;
         ++rows;
@@ -227,6 +253,9 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
     k.reach = std::max(0, contact - top) * k.depth / spec.focal_px;
+    const int standing_top = ConnectedTop(s.disparity, x, bottom, disparity, o.contact_tolerance_px,
+                                          static_cast<int>(o.max_gap_below_m * spec.focal_px / k.depth), member);
+    k.standing = std::max(0, contact - standing_top) * k.depth / spec.focal_px;
     contacts.push_back(k);
   }
   return contacts;
@@ -485,7 +514,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
     contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
     std::vector<Eigen::Vector2d> points;
-    std::vector<double> heights, tops, reaches, disparities;
+    std::vector<double> heights, tops, standing, disparities;
     std::vector<const Contact*> kept;
     // The height test over all the component's columns: the columns that are not solid are its low
     // ones, and without them low components (road, kerbs) would pass it.
@@ -493,7 +522,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
       tops.push_back(TopOf(k, options_.stereo.block_height, spec.focal_px));
-      reaches.push_back(k.reach);
+      standing.push_back(k.standing);
       if (k.solid) solid.push_back(k);
     }
     for (const Contact& k : solid) {
@@ -519,7 +548,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     // mismatch does not).
     const double top = UpperQuartile(&tops);
     if (top < options_.min_obstacle_height_m) continue;
-    if (pacing && options_.pacing_above_camera && UpperQuartile(&reaches) <= camera_height_m_) continue;
+    if (pacing && options_.pacing_above_camera && UpperQuartile(&standing) <= camera_height_m_) continue;
     for (const Contact* k : kept) r.obstacle.at<std::uint8_t>(k->y, k->x) = 255;
     Detection det = DetectionFromPoints(points, camera_.name);
     det.height_m = top;

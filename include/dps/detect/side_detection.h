@@ -120,11 +120,12 @@ struct SideDetectorOptions {
   // m; 0 = no test.
   double max_vehicle_width_m = 2.6;
   // Something keeping pace with us stands up into the view above the horizon, the camera's height at
-  // every distance: its topmost matched pixels (three quarters of its columns reach at least as
-  // high) lie above the camera, while a band of road or verge lies on the road and ends below the
-  // horizon. Road vehicles stand taller than a camera in a side mirror; a car lower than the camera
-  // that keeps exactly our speed is lost with this test (from one pair of frames it is the same
-  // picture as such a band).
+  // every distance: standing up from its contact through pixels at its disparity or without one, its
+  // columns (three quarters of them) reach above the camera, while a band of road or verge lies on
+  // the road and ends below the horizon (the sky above the horizon, also at zero disparity, does not
+  // count: rows matched at other disparities or too many without one lie between). Road vehicles
+  // stand taller than a camera in a side mirror; a car lower than the camera that keeps exactly our
+  // speed is lost with this test (from one pair of frames it is the same picture as such a band).
   bool pacing_above_camera = true;
 
   SideDetectorOptions();
