@@ -2,7 +2,9 @@
 # Runs the whole test suite: installs what is missing, builds (Release), runs CTest.
 #   scripts/test.sh              the suite (what CI runs)
 #   scripts/test.sh --sanitize   also an AddressSanitizer + UndefinedBehaviorSanitizer build in
-#                                build-sanitize/ running every test but the slow-labelled renders,
+#                                build-sanitize/ (the library and the tools instrumented, the tests
+#                                linked with the sanitizers' runtime) running every test but the
+#                                slow-labelled renders,
 #                                and, where clang++ is installed, a fuzzing smoke run of every
 #                                reader (scripts/fuzz.sh, DPS_FUZZ_SECONDS each, default 60; 0 = none)
 set -euo pipefail
