@@ -11,14 +11,24 @@
 #include "dps/detect/ground_projection.h"
 #include "dps/util/error.h"
 #include "dps/util/image.h"
+#include "dps/util/math.h"
 
 namespace dps {
+namespace {
+
+// The columns an angle of a view spans at its centre (focal_px x angle).
+int ViewColumns(double degrees, double focal_px) {
+  return static_cast<int>(std::lround(focal_px * degrees * kRadPerDeg));
+}
+
+}  // namespace
+
 void FrontDetectorOptions::Check() const {
   const OptionCheck Require("front detector");
   Require(view_width > 0 && view_width <= 8192, "view_width", view_width, "1..8192 px");
   Require(view_height > 0 && view_height <= 8192, "view_height", view_height, "1..8192 px");
   Require(focal_px > 0 && focal_px <= 100.0 * view_width, "focal_px", focal_px, "> 0 and at most 100 view widths");
-  Require(link_max_gap >= 0, "link_max_gap", link_max_gap, ">= 0 columns");
+  Require(link_max_gap_deg >= 0 && link_max_gap_deg <= 180, "link_max_gap_deg", link_max_gap_deg, "0..180 degrees");
   Require(link_max_gap_m >= 0, "link_max_gap_m", link_max_gap_m, ">= 0");
   Require(link_max_top_difference_m >= 0, "link_max_top_difference_m", link_max_top_difference_m, ">= 0");
   Require(link_free_gap_m >= 0, "link_free_gap_m", link_free_gap_m, ">= 0");
@@ -27,7 +37,7 @@ void FrontDetectorOptions::Check() const {
   Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
   Require(own_car_height_m >= 0, "own_car_height_m", own_car_height_m, ">= 0");
   Require(min_obstacle_height_m >= 0, "min_obstacle_height_m", min_obstacle_height_m, ">= 0");
-  Require(tall_min_columns >= 0, "tall_min_columns", tall_min_columns, ">= 0");
+  Require(tall_min_width_deg >= 0 && tall_min_width_deg <= 180, "tall_min_width_deg", tall_min_width_deg, "0..180 degrees");
   Require(tall_min_top_m >= 0, "tall_min_top_m", tall_min_top_m, ">= 0");
   Require(drift_interval >= 0, "drift_interval", drift_interval, ">= 0 (0 = never)");
   Require(drift_min_px >= 0, "drift_min_px", drift_min_px, ">= 0");
@@ -42,7 +52,7 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   options_.histogram.min_disparity = options.stereo.min_disparity;
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = false;
-  options_.histogram.link_max_gap = options.link_max_gap;
+  options_.histogram.link_max_gap = ViewColumns(options.link_max_gap_deg, options.focal_px);
   options_.histogram.Check();
   spec_ = FrontViewSpec(rig, "left", "right", options.view_width, options.view_height, options.focal_px);
   left_ = std::make_unique<VirtualView>(rig.Camera("left"), spec_);
@@ -281,7 +291,8 @@ bool FrontDetector::StandsUp(const VirtualView& view, const FrontMatch& m, const
   if (heights.empty()) return false;
   std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
   return heights[heights.size() / 2] >= options_.min_obstacle_height_m ||
-         (c.x_end - c.x_begin >= options_.tall_min_columns && TopHeight(view, m, labels, c) >= options_.tall_min_top_m);
+         (c.x_end - c.x_begin >= ViewColumns(options_.tall_min_width_deg, options_.focal_px) &&
+          TopHeight(view, m, labels, c) >= options_.tall_min_top_m);
 }
 
 void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, std::pair<int, int> valid_columns,

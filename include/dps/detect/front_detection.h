@@ -29,9 +29,10 @@ struct FrontDetectorOptions {
   double focal_px = 170.0;     // front view focal length, px
   StereoOptions stereo = DetectionStereoOptions();  // its disparity range is the histogram's too
   HistogramOptions histogram;  // its disparity range is taken from `stereo`
-  // Parts of one surface up to this many columns and metres on the ground apart are linked
-  // (LinkComponents; link_max_gap = 0: never).
-  int link_max_gap = 60;
+  // Parts of one surface up to this angle of the view (the columns it spans at the view's centre,
+  // focal_px x angle) and metres on the ground apart are linked (LinkComponents;
+  // link_max_gap_deg = 0: never). Degrees, 0..180.
+  double link_max_gap_deg = 20.2;  // 60 columns at f = 170 px (640x480 omni images)
   double link_max_gap_m = 6.0;
   // ... and whose tops differ by at most this (the height above the road three quarters of a
   // part's columns reach with their highest pixel), m; 0 = no such test. One car's parts reach
@@ -50,10 +51,11 @@ struct FrontDetectorOptions {
   // Components whose pixels reach less than this above the road (median over columns) are flat
   // (markings, mismatched road) and dropped; metres, >= 0.
   double min_obstacle_height_m = 0.5;
-  // ... unless at least tall_min_columns wide with a top (TopHeight) at least tall_min_top_m high:
-  // a car's long side seen at a grazing angle is matched in a few rows per column (its body's
-  // bands have no texture), yet its highest pixels reach its roof line.
-  int tall_min_columns = 60;
+  // ... unless at least tall_min_width_deg of the view wide (columns as for link_max_gap_deg) with
+  // a top (TopHeight) at least tall_min_top_m high: a car's long side seen at a grazing angle is
+  // matched in a few rows per column (its body's bands have no texture), yet its highest pixels
+  // reach its roof line. Degrees, 0..180.
+  double tall_min_width_deg = 20.2;  // as link_max_gap_deg
   double tall_min_top_m = 0.8;
   // Drift correction: every `drift_interval` frames (0 = never) the rows of the two views are
   // compared (EstimateVerticalOffset); a shift of more than drift_min_px measured on at least
