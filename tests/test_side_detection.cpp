@@ -12,7 +12,11 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <initializer_list>
+#include <limits>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "check.h"
@@ -452,6 +456,39 @@ void TestPersisting() {
   CHECK(!dps::Persisting({{0.0, 0.0}}, {}, 0.5));
 }
 
+// Standing up on columns with known rows (a 200-row column; NaN = no disparity; members: the
+// rows given). A band of road at zero disparity with the sky above the horizon in its component:
+// the rows between them have no disparity, more than the gap allows, so the band stands up only
+// to its own top. A car keeping pace: its contact at 0.3 px, its body matched at 1.2 px (within
+// the 1.5 px tolerance, outside the component), an untextured stretch of 10 rows (the gap allows
+// 12), its roof line in the component, then a mismatch at 9 px that ends it below the sky.
+void TestConnectedTop() {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const auto column = [](std::initializer_list<std::tuple<int, int, float>> runs) {
+    cv::Mat d(200, 1, CV_32F, cv::Scalar(std::numeric_limits<float>::quiet_NaN()));
+    for (const auto& [first, last, v] : runs) d.rowRange(first, last + 1).setTo(v);
+    return d;
+  };
+  const auto rows = [](std::initializer_list<std::pair<int, int>> runs) {
+    return [runs = std::vector<std::pair<int, int>>(runs)](int y) {
+      for (const auto& [first, last] : runs) if (y >= first && y <= last) return true;
+      return false;
+    };
+  };
+  const cv::Mat band = column({{0, 79, 0.0f}, {80, 139, nan}, {140, 159, 0.0f}});
+  CHECK(dps::ConnectedTop(band, 0, 159, 0.0, 1.5, 12, rows({{0, 79}, {140, 159}})) == 140);
+  // Without the rows between (a gap of 60 allowed) the band reaches the sky's top row.
+  CHECK(dps::ConnectedTop(band, 0, 159, 0.0, 1.5, 60, rows({{0, 79}, {140, 159}})) == 0);
+  const cv::Mat car = column({{0, 94, 0.0f}, {95, 99, 9.0f}, {100, 129, 0.5f}, {130, 139, nan},
+                              {140, 149, 1.2f}, {150, 159, 0.3f}});
+  const auto car_members = rows({{0, 94}, {100, 129}, {150, 159}});
+  CHECK(dps::ConnectedTop(car, 0, 159, 0.3, 1.5, 12, car_members) == 100);
+  // The body's 1.2 px outside a 0.5 px tolerance ends it at the contact's top; a gap of 9 rows
+  // allowed ends it below the untextured stretch.
+  CHECK(dps::ConnectedTop(car, 0, 159, 0.3, 0.5, 12, car_members) == 150);
+  CHECK(dps::ConnectedTop(car, 0, 159, 0.3, 1.5, 9, car_members) == 140);
+}
+
 // Driving slowly: a static object as deep as the views keep (max_depth_m, 6 m) shifts f B / 6 m
 // between the frames; under min_motion_disparity_px (3 px) nothing there can be told from the road
 // or from something keeping pace with us, so the pair is not matched. With the views' focal length
@@ -532,6 +569,7 @@ int main(int argc, char** argv) {
     return dps_test::Report();
   }
   TestPersisting();
+  TestConnectedTop();
   TestParkedBeside();
   TestStandingFarOut();
   TestRearCornerAhead();

@@ -153,28 +153,6 @@ bool SolidAboveContact(const ContactSearch& s, int x, int lowest, double depth, 
   return true;
 }
 
-// The topmost row that a column's object reaches standing up from its bottom-most member `bottom`:
-// upwards through pixels at the object's disparity (members, or within contact_tolerance_px of
-// `disparity`: the component's neighbouring bins) and through pixels without a disparity (an
-// untextured body; at most max_gap_px of them running); a pixel matched at any other disparity ends
-// it. A band of road that the matcher left at zero disparity joins the sky above the horizon,
-// also at zero disparity, in one histogram component, but not through the rows between them.
-int ConnectedTop(const cv::Mat& disparity_image, int x, int bottom, double disparity, double tolerance_px,
-                 int max_gap_px, const std::function<bool(int)>& member) {
-  int top = bottom, gap = 0;
-  for (int y = bottom - 1; y >= 0; --y) {
-    const float v = disparity_image.at<float>(y, x);
-    if (!std::isfinite(v)) {
-      if (++gap > max_gap_px) break;
-      continue;
-    }
-    if (!member(y) && !(std::abs(v - disparity) <= tolerance_px)) break;
-    top = y;
-    gap = 0;
-  }
-  return top;
-}
-
 // A column's top above the road: its reach less the half window by which the matcher carries an
 // object's disparity above its top edge.
 double TopOf(const Contact& k, int block_height, double focal_px) {
@@ -370,6 +348,23 @@ bool Persisting(const std::vector<Eigen::Vector2d>& points, const std::vector<st
     nearest.push_back(d2);
   }
   return !nearest.empty() && Median(nearest) <= distance * distance;
+}
+
+int ConnectedTop(const cv::Mat& disparity, int x, int bottom, double disparity_px, double tolerance_px, int max_gap_px,
+                 const std::function<bool(int)>& member) {
+  CV_Assert(disparity.type() == CV_32F && x >= 0 && x < disparity.cols && bottom >= 0 && bottom < disparity.rows);
+  int top = bottom, gap = 0;
+  for (int y = bottom - 1; y >= 0; --y) {
+    const float v = disparity.at<float>(y, x);
+    if (!std::isfinite(v)) {
+      if (++gap > max_gap_px) break;
+      continue;
+    }
+    if (!member(y) && !(std::abs(v - disparity_px) <= tolerance_px)) break;
+    top = y;
+    gap = 0;
+  }
+  return top;
 }
 
 int SideDetector::ScaleSixteenths(double baseline_m) const {

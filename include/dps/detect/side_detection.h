@@ -16,6 +16,7 @@
 // in the vehicle frame of the current frame.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -156,6 +157,15 @@ std::pair<int, int> SideMatchedColumns(Side side, int width, const StereoOptions
 // of a point of one of the `earlier` components (SideDetectorOptions::pacing_persistence_m).
 bool Persisting(const std::vector<Eigen::Vector2d>& points, const std::vector<std::vector<Eigen::Vector2d>>& earlier,
                 double distance_m);
+// The topmost row that an object reaches standing up in column x of a side view's disparity
+// (CV_32F, NaN where none) from its bottom-most pixel `bottom`, matched at `disparity_px`: upwards
+// through the rows of its histogram component (`member`), rows within tolerance_px of its
+// disparity (the component's neighbouring bins) and runs of at most max_gap_px rows without a
+// disparity (an untextured body); a row matched at any other disparity ends it. A band of road
+// that the matcher left at zero disparity shares its component with the sky above the horizon,
+// but the rows between them end it (SideDetectorOptions::pacing_above_camera).
+int ConnectedTop(const cv::Mat& disparity, int x, int bottom, double disparity_px, double tolerance_px, int max_gap_px,
+                 const std::function<bool(int)>& member);
 // The side view of these options with its size and focal length times `scale`, turned by yaw_rad.
 ViewSpec SideDetectorViewSpec(Side side, const SideDetectorOptions& options, double scale = 1.0, double yaw_rad = 0.0);
 
