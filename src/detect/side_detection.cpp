@@ -48,16 +48,16 @@ double Median(std::vector<double> v) {
 // One column of a component: where it meets the road (view pixel and ground point), its depth
 // along the view axis (a static object's from its disparity too: StaticDepth), its disparity, its
 // height (the rows it fills with its disparity) and its reach, the highest of those rows' height
-// above the road as matched (TopOf leaves out the matcher's fattening); standing: the height above
-// the road that the column reaches standing up from its contact (ConnectedTop); row_depth: the depth
-// of its lowest pixel's ground point alone, which max_depth_m limits.
+// above the road as matched (TopOf leaves out the matcher's fattening); bottom: the row of its
+// bottom-most pixel in the component, contact_row: the row taken as its contact (StandingHeight);
+// row_depth: the depth of its lowest pixel's ground point alone, which max_depth_m limits.
 // solid: the column shows the object, not the road beyond, above the contact (SolidAboveContact;
 // tested with static_gate on only); a column that is not solid still counts for the component's
 // height, but gives no point.
 struct Contact {
-  int x = 0, y = 0;
+  int x = 0, y = 0, bottom = 0, contact_row = 0;
   Eigen::Vector2d ground{0, 0};
-  double depth = 0.0, disparity = 0.0, height = 0.0, reach = 0.0, standing = 0.0, row_depth = 0.0;
+  double depth = 0.0, disparity = 0.0, height = 0.0, reach = 0.0, row_depth = 0.0;
   bool solid = true;
 };
 
@@ -173,23 +173,36 @@ bool Member(float score, float road_disparity, double min_score) {
   return score > 0.0f && (!std::isfinite(road_disparity) || score >= min_score);
 }
 
+// Whether pixel (x, y) belongs to component c: matched in one of its histogram bins, and a member
+// of the histogram's votes (Member).
+bool InComponent(const ContactSearch& s, const HistogramComponent& c, int x, int y) {
+  const HistogramOptions& ho = s.options.histogram;
+  const float v = s.disparity.at<float>(y, x);
+  if (!std::isfinite(v) || !Member(s.score.at<float>(y, x), s.road.at<float>(y, x), s.options.member_min_score)) return false;
+  const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
+  return bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label;
+}
+
+// The height above the road that a column of component c stands up to from its contact
+// (ConnectedTop; SideDetectorOptions::pacing_above_camera).
+double StandingHeight(const ContactSearch& s, const HistogramComponent& c, const Contact& k) {
+  const double f = s.reference.spec().focal_px;
+  const int top = ConnectedTop(s.disparity, k.x, k.bottom, k.disparity, s.options.contact_tolerance_px,
+                               static_cast<int>(s.options.max_gap_below_m * f / k.depth),
+                               [&](int y) { return InComponent(s, c, k.x, y); });
+  return std::max(0, k.contact_row - top) * k.depth / f;
+}
+
 // A component's contacts with the road, one per column where it has one.
 std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramComponent& c) {
   const SideDetectorOptions& o = s.options;
-  const HistogramOptions& ho = o.histogram;
   const ViewSpec& spec = s.reference.spec();
   std::vector<Contact> contacts;
   for (int x = c.x_begin; x < c.x_end; ++x) {
     // The component's pixels in this column; the bottom-most is the contact with the road.
     int top = -1, bottom = -1, rows = 0;
-    const auto member = [&](int y) {
-      const float v = s.disparity.at<float>(y, x);
-      if (!std::isfinite(v) || !Member(s.score.at<float>(y, x), s.road.at<float>(y, x), o.member_min_score)) return false;
-      const int bin = static_cast<int>(std::floor((v - ho.min_disparity) / ho.bin_px));
-      return bin >= 0 && bin < s.labels.rows && s.labels.at<int>(bin, x) == c.label;
-    };
     for (int y = 0; y < spec.height; ++y) {
-      if (member(y)) {
+      if (InComponent(s, c, x, y)) {
         if (top < 0) top = y;
         bottom = y;
         ++rows;
@@ -231,9 +244,8 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
     k.disparity = disparity;
     k.height = (rows + lowest - bottom) * k.depth / spec.focal_px;
     k.reach = std::max(0, contact - top) * k.depth / spec.focal_px;
-    const int standing_top = ConnectedTop(s.disparity, x, bottom, disparity, o.contact_tolerance_px,
-                                          static_cast<int>(o.max_gap_below_m * spec.focal_px / k.depth), member);
-    k.standing = std::max(0, contact - standing_top) * k.depth / spec.focal_px;
+    k.bottom = bottom;
+    k.contact_row = contact;
     contacts.push_back(k);
   }
   return contacts;
@@ -509,7 +521,7 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
     contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
     std::vector<Eigen::Vector2d> points;
-    std::vector<double> heights, tops, standing, disparities;
+    std::vector<double> heights, tops, disparities;
     std::vector<const Contact*> kept;
     // The height test over all the component's columns: the columns that are not solid are its low
     // ones, and without them low components (road, kerbs) would pass it.
@@ -517,7 +529,6 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     for (const Contact& k : contacts) {
       heights.push_back(k.height);
       tops.push_back(TopOf(k, options_.stereo.block_height, spec.focal_px));
-      standing.push_back(k.standing);
       if (k.solid) solid.push_back(k);
     }
     for (const Contact& k : solid) {
@@ -543,7 +554,12 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     // mismatch does not).
     const double top = UpperQuartile(&tops);
     if (top < options_.min_obstacle_height_m) continue;
-    if (pacing && options_.pacing_above_camera && UpperQuartile(&standing) <= camera_height_m_) continue;
+    if (pacing && options_.pacing_above_camera) {
+      // Only for a component keeping pace: the walk up every column is not needed for the others.
+      std::vector<double> standing;
+      for (const Contact& k : contacts) standing.push_back(StandingHeight(search, c, k));
+      if (UpperQuartile(&standing) <= camera_height_m_) continue;
+    }
     for (const Contact* k : kept) r.obstacle.at<std::uint8_t>(k->y, k->x) = 255;
     Detection det = DetectionFromPoints(points, camera_.name);
     det.height_m = top;
