@@ -224,6 +224,43 @@ void TestInterestOperator() {
   }
 }
 
+// The two levels' cross check on a pair whose fine pattern (white noise) moves with another
+// disparity than its coarse structure (blobs): the full-resolution level follows the fine pattern,
+// the half-resolution one, where pyrDown has blurred most of the noise away, the structure. The
+// check drops the full level's disparities where the two disagree; without it they stay.
+void TestCrossLevelCheck() {
+  const int w = 320, h = 160, d_coarse = 8, d_fine = 20;
+  cv::Mat blobs(h, w + d_fine, CV_8U), noise(h, w + d_fine, CV_8U);
+  cv::RNG rng(7);
+  rng.fill(blobs, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(blobs, blobs, cv::Size(), 3.0);
+  cv::normalize(blobs, blobs, 0, 160, cv::NORM_MINMAX);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 96);
+  // left(x) matches right(x - d): right(x) = left(x + d), the blobs with d_coarse, the noise d_fine.
+  const cv::Mat l = blobs.colRange(0, w) + noise.colRange(0, w);
+  const cv::Mat r = blobs.colRange(d_coarse, d_coarse + w) + noise.colRange(d_fine, d_fine + w);
+  dps::StereoOptions o = dps::DetectionStereoOptions();
+  o.num_disparities = 32;
+  // Pixels within 1 px of the noise's disparity, over the area where all disparities are searched.
+  auto at_fine = [&](double max_diff) {
+    o.cross_level_max_diff = max_diff;
+    const cv::Mat d = dps::SadStereoMatcher(o).Compute(l, r);
+    int valid = 0, n = 0;
+    for (int y = 10; y < h - 10; ++y) {
+      for (int x = 50; x < w - 10; ++x) {
+        const float v = d.at<float>(y, x);
+        valid += std::isfinite(v);
+        n += std::isfinite(v) && std::abs(v - d_fine) <= 1.0f;
+      }
+    }
+    std::printf("cross check %s: %d valid, %d at the noise's disparity\n", max_diff < 0 ? "off" : "on ", valid, n);
+    return n;
+  };
+  const int off = at_fine(-1.0), on = at_fine(4.0);
+  CHECK(off > 30000);     // the full level alone follows the noise nearly everywhere (of 36400)
+  CHECK(on < off / 20);   // the check leaves almost none of it
+}
+
 void TestBadOptions() {
   auto with = [](auto change) {
     dps::StereoOptions o;
@@ -243,6 +280,8 @@ void TestBadOptions() {
                     "uniqueness_ratio");
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.log_sigma_px = 0; })), dps::Error, "log_sigma_px");
   CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.prefilter_cap = 64; })), dps::Error, "prefilter_cap");
+  CHECK_THROWS_WITH(dps::SadStereoMatcher(with([](auto& o) { o.cross_level_max_diff = std::nan(""); })), dps::Error,
+                    "cross_level_max_diff");
   dps::SadStereoMatcher m(dps::StereoOptions{});
   CHECK_THROWS_WITH(m.Compute(cv::Mat(50, 60, CV_8U), cv::Mat(51, 60, CV_8U)), dps::Error, "the left's rows");
   CHECK_THROWS_WITH(m.Compute(cv::Mat(50, 60, CV_8U), cv::Mat(50, 60, CV_8U)), dps::Error, "too small");
@@ -414,6 +453,7 @@ int main() {
   TestPreparedViews();
   TestKernelsAgree();
   TestInterestOperator();
+  TestCrossLevelCheck();
   TestBadOptions();
   TestTemporalFilter();
   TestDisparityFiles();

@@ -28,6 +28,8 @@ must be non-negative), .pfm = float disparity, invalid = inf.
   --texture T           interest operator threshold (default 1)
   --no-lr-check         skip the left-right consistency check
   --one-level           skip the coarse level that fills low-texture areas
+  --cross-check PX      drop full-resolution disparities more than PX from the coarse level's
+                        (off by default; 4 checks to two coarse pixels)
   --baseline-kernel     the matcher's baseline instruction-set kernel even where AVX2 runs
                         (the same disparities; for timing comparisons)
   --out FILE            disparity output
@@ -46,7 +48,7 @@ cv::Mat ReadGrey(const std::string& path) {
 int main(int argc, char** argv) {
   return dps_cli::Run("dps-stereo", [&] {
     const dps_cli::Args args(argc, argv,
-                             {"num-disparities", "min-disparity", "block", "uniqueness", "texture", "out", "color"},
+                             {"num-disparities", "min-disparity", "block", "uniqueness", "texture", "cross-check", "out", "color"},
                              {"no-lr-check", "one-level", "baseline-kernel"});
     if (args.help()) {
       std::cout << kUsage;
@@ -63,6 +65,7 @@ int main(int argc, char** argv) {
     o.texture_threshold = args.Number("texture", o.texture_threshold);
     o.left_right_check = !args.Has("no-lr-check");
     o.two_levels = !args.Has("one-level");
+    o.cross_level_max_diff = args.Number("cross-check", o.cross_level_max_diff);
     o.baseline_kernel = args.Has("baseline-kernel");
     const std::string out = args.Get("out");
     const bool png = out.size() >= 4 && out.compare(out.size() - 4, 4, ".png") == 0;

@@ -119,6 +119,7 @@ void StereoOptions::Check() const {
   Require(uniqueness_ratio >= 0.0 && uniqueness_ratio <= 100.0, "uniqueness_ratio", uniqueness_ratio,
           "0..100");
   Require(left_right_max_diff >= 0.0, "left_right_max_diff", left_right_max_diff, ">= 0");
+  Require(!std::isnan(cross_level_max_diff), "cross_level_max_diff", cross_level_max_diff, "a number (< 0: no check)");
   // The window's cost must fit 16 bits: (2 cap) * area < 65536.
   Require(2 * prefilter_cap * block_width * block_height < 65536, "prefilter_cap", prefilter_cap,
           "2 cap * block area < 65536");
@@ -410,6 +411,9 @@ void SadStereoMatcher::FillFromCoarse(const cv::Mat& coarse, int first_column, c
   const StereoOptions& o = options_;
   const float d_lo = static_cast<float>(o.min_disparity);
   const float d_hi = static_cast<float>(o.min_disparity + o.num_disparities - 1);
+  // No check: a tolerance no difference exceeds (the invalid +inf is never compared).
+  const float tolerance = o.cross_level_max_diff < 0 ? std::numeric_limits<float>::max()
+                                                      : static_cast<float>(o.cross_level_max_diff);
   cv::parallel_for_(cv::Range(0, fine.rows), [&](const cv::Range& rows) {
     // The coarse row doubled and each value repeated over its two fine columns (the last one over
     // the rest), once per coarse row.
@@ -427,16 +431,21 @@ void SadStereoMatcher::FillFromCoarse(const cv::Mat& coarse, int first_column, c
       int x = first_column;
 #if CV_SIMD
       const cv::v_float32 invalid = cv::vx_setall_f32(kInvalidDisparity);
-      const cv::v_float32 lo = cv::vx_setall_f32(d_lo), hi = cv::vx_setall_f32(d_hi);
+      const cv::v_float32 lo = cv::vx_setall_f32(d_lo), hi = cv::vx_setall_f32(d_hi), tol = cv::vx_setall_f32(tolerance);
       for (; x + cv::v_float32::nlanes <= fine.cols; x += cv::v_float32::nlanes) {
         const cv::v_float32 v = cv::vx_load(f + x), u = cv::vx_load(up.data() + x);
-        // The invalid +inf coarse value fails u <= hi.
-        cv::v_store(f + x, cv::v_select((v == invalid) & (u >= lo) & (u <= hi), u, v));
+        // The invalid +inf coarse value fails u <= hi and u < invalid.
+        const cv::v_float32 fill = (v == invalid) & (u >= lo) & (u <= hi);
+        const cv::v_float32 disagree = (v < invalid) & (u < invalid) & (cv::v_abs(v - u) > tol);
+        cv::v_store(f + x, cv::v_select(fill, u, cv::v_select(disagree, invalid, v)));
       }
 #endif
       for (; x < fine.cols; ++x) {
-        if (f[x] != kInvalidDisparity) continue;
-        if (up[x] >= d_lo && up[x] <= d_hi) f[x] = up[x];  // false for the invalid +inf
+        if (f[x] == kInvalidDisparity) {
+          if (up[x] >= d_lo && up[x] <= d_hi) f[x] = up[x];  // false for the invalid +inf
+        } else if (up[x] != kInvalidDisparity && std::abs(f[x] - up[x]) > tolerance) {
+          f[x] = kInvalidDisparity;
+        }
       }
     }
   });

@@ -21,7 +21,10 @@
 //    texture_threshold) rejects uniform areas and horizontal edges; a uniqueness test rejects ambiguous minima; a left-right check compares with the best
 //    match seen from the right image.
 // 4. Two levels: the same search on half-resolution images fills pixels the full-resolution level
-//    left invalid (low texture), with twice the coarse disparity.
+//    left invalid (low texture), with twice the coarse disparity; with cross_level_max_diff set it
+//    also checks the others: a full-resolution disparity farther than that from twice the coarse
+//    one is dropped (a match on a fine pattern that repeats, or on noise, which the coarser view
+//    of the same window does not support).
 // Validity: an image may come with a mask of the pixels that see the world (a view's pixels with a
 // camera source, inside the camera's field). Invalid pixels take the value of the nearest valid one
 // before the prefilter (no edge where the valid area ends), and no disparity comes from a window
@@ -61,6 +64,12 @@ struct StereoOptions {
   // a window spans no more of that change than at full resolution. Its interest operator still
   // judges the usual (twice as tall) window.
   bool coarse_same_rows = false;
+  // Full-resolution disparities differing from twice the coarse level's at that pixel by more
+  // than this are dropped (px, full resolution; < 0: no check, the default). 4 px checks to two
+  // pixels of the coarse level, its own step and its left-right tolerance. Off by default: on the
+  // robustness battery it found more objects but also more kerbs and parts of long objects
+  // (docs/experiments/detection-history.md).
+  double cross_level_max_diff = -1.0;
   bool subpixel = true;            // equiangular (V) refinement
   // The kernel built for the baseline instruction set even where the CPU runs the AVX2 one (both
   // give the same disparities; for comparisons and benchmarks).
@@ -138,7 +147,8 @@ class SadStereoMatcher {
   // One level of prefiltered images, the left view's columns from first_column on.
   const cv::Mat& MatchLevel(const PreparedView& left, const PreparedView& right, int min_disparity,
                             int num_disparities, int level, int first_column);
-  // Fills the fine level's invalid pixels from first_column on with twice the coarse disparity.
+  // Fills the fine level's invalid pixels from first_column on with twice the coarse disparity, and
+  // drops its valid ones differing from that by more than cross_level_max_diff (when >= 0).
   void FillFromCoarse(const cv::Mat& coarse, int first_column, cv::Mat& fine) const;
   StereoOptions options_;
   std::unique_ptr<Workspace> ws_;
