@@ -259,6 +259,16 @@ void TestFusion() {
   behind.frame = 7;
   CHECK_EQ(dps::MergeVehicleParts({near_part, far_part, behind}, 5.0, 2.2, false, viewpoints).size(), size_t{3});
   CHECK_EQ(dps::MergeVehicleParts({near_part, far_part, behind}, 5.0, 2.2, false).size(), size_t{2});
+  // The front pair's depth error (half a pixel of disparity at f = 170 px, B = 2.2 m: k r^2 with
+  // k = 0.5 / 374 per metre) at each part's far end: two parts of one car's side spanning 5.8 m at
+  // 9-15 m (0.27 m and 0.15 m of error there) fit a 5.5 m footprint; the same 5.8 m at 1.5-7.5 m
+  // (0.06 m and 0.02 m) do not; without the error neither does.
+  const std::map<std::string, double> depth_error = {{"front", 0.5 / (170.0 * 2.2)}};
+  const dps::Detection side_a = line(2.5, 9.0, 2.5, 11.0, "front"), side_b = line(2.5, 13.2, 2.5, 14.8, "front");
+  CHECK_EQ(dps::MergeVehicleParts({side_a, side_b}, 5.5, 2.2, false, viewpoints, depth_error).size(), size_t{1});
+  CHECK_EQ(dps::MergeVehicleParts({side_a, side_b}, 5.5, 2.2, false, viewpoints).size(), size_t{2});
+  const dps::Detection close_a = line(2.5, 1.5, 2.5, 3.5, "front"), close_b = line(2.5, 5.7, 2.5, 7.3, "front");
+  CHECK_EQ(dps::MergeVehicleParts({close_a, close_b}, 5.5, 2.2, false, viewpoints, depth_error).size(), size_t{2});
 }
 
 // A rig with one pinhole camera (unified, xi = 0; 640x480, f = 300 px) 1.2 m above the road at

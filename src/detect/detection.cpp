@@ -146,8 +146,21 @@ bool SeenBetween(const Detection& a, const Detection& b, const Sightings& source
 
 std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_length_m, double max_width_m,
                                          bool across_sources_only,
-                                         const std::map<std::string, Eigen::Vector2d>& viewpoints) {
+                                         const std::map<std::string, Eigen::Vector2d>& viewpoints,
+                                         const std::map<std::string, double>& depth_error_per_m2) {
   for (Detection& e : d) e.points = PointsOf(e);
+  // A part's depth error at its farthest point from its source (0 without the source's k).
+  const auto slack = [&](const Detection& e) {
+    const auto k = depth_error_per_m2.find(e.source);
+    const auto v = viewpoints.find(e.source);
+    if (k == depth_error_per_m2.end() || v == viewpoints.end()) return 0.0;
+    double far2 = 0.0;
+    for (const Eigen::Vector2d& p : e.points) far2 = std::max(far2, (p - v->second).squaredNorm());
+    return k->second * far2;
+  };
+  // Merged parts' slack: the larger of theirs (the union's ends are theirs).
+  std::vector<double> slacks;
+  for (const Detection& e : d) slacks.push_back(slack(e));
   // Each source's sightings, once: merging only regroups the points.
   std::map<std::string, Sightings> sightings;
   for (const auto& [source, viewpoint] : viewpoints) {
@@ -177,7 +190,7 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
         const cv::RotatedRect box = cv::minAreaRect(points);
         const double length = std::max(box.size.width, box.size.height), width = std::min(box.size.width, box.size.height);
         const std::pair<bool, double> key{d[i].source == d[j].source, length};
-        if (length > max_length_m || width > max_width_m || !(key < best)) continue;
+        if (length > max_length_m + slacks[i] + slacks[j] || width > max_width_m || !(key < best)) continue;
         const auto source = sightings.find(d[i].source);
         if (d[i].source == d[j].source && source != sightings.end() && SeenBetween(d[i], d[j], source->second)) continue;
         best = key;
@@ -187,7 +200,9 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
     }
     if (!std::isfinite(best.second)) break;
     d[bi] = Merged(d[bi], d[bj]);
+    slacks[bi] = std::max(slacks[bi], slacks[bj]);
     d.erase(d.begin() + static_cast<std::ptrdiff_t>(bj));
+    slacks.erase(slacks.begin() + static_cast<std::ptrdiff_t>(bj));
   }
   Renumber(&d);
   return d;

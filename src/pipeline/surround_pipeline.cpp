@@ -111,6 +111,7 @@ void PipelineOptions::Check() const {
   Require(merge_distance_m >= 0, "merge_distance_m", merge_distance_m, ">= 0");
   Require(vehicle_length_m >= 0, "vehicle_length_m", vehicle_length_m, ">= 0 (0 = no merging)");
   Require(vehicle_width_m >= 0, "vehicle_width_m", vehicle_width_m, ">= 0");
+  Require(vehicle_disparity_slack_px >= 0, "vehicle_disparity_slack_px", vehicle_disparity_slack_px, ">= 0");
   front.Check();
   side.Check();
   rear.Check();
@@ -132,6 +133,8 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
   // Where each source looks from (the sectors' apexes), for MergeVehicleParts' see-through test.
   for (const Sector& s : coverage_.sectors) viewpoints_[s.name] = s.apex;
   front_ = std::make_unique<FrontDetector>(rig, options.front);
+  // ... and the front pair's depth error there (the sides' changes with the speed every frame).
+  depth_error_per_m2_["front"] = options.vehicle_disparity_slack_px / (options.front.focal_px * front_->baseline_m());
   if (options.sides) {
     left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
     right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
@@ -236,7 +239,8 @@ void SurroundPipeline::Collect(const FrameInput& in, bool sides, const cv::Mat g
   out->detections = FuseDetections(out->detections, options_.merge_distance_m);
   if (options_.vehicle_length_m > 0) {
     out->detections = MergeVehicleParts(std::move(out->detections), options_.vehicle_length_m,
-                                        options_.vehicle_width_m, options_.vehicle_across_sources_only, viewpoints_);
+                                        options_.vehicle_width_m, options_.vehicle_across_sources_only, viewpoints_,
+                                        depth_error_per_m2_);
   }
   for (Detection& d : out->detections) SetAttributes(out->lanes.boundaries, options_.classes, &d);
 }

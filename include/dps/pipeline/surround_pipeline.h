@@ -39,6 +39,10 @@ struct PipelineOptions {
   double vehicle_length_m = 5.5;
   double vehicle_width_m = 2.2;
   bool vehicle_across_sources_only = false;
+  // The footprint's length allows for the front pair's depth error at each part's far end: this
+  // much disparity (MergeVehicleParts' depth_error_per_m2, k = this / (f B)); half a pixel each,
+  // the two ends of a union together one pixel. px, >= 0 (0: the footprint as it is).
+  double vehicle_disparity_slack_px = 0.5;
   // Each detection's lane (from the frame's lanes) and class (object_attributes.h).
   ClassOptions classes;
 
@@ -108,6 +112,7 @@ class SurroundPipeline {
   PipelineOptions options_;
   Coverage coverage_;
   std::map<std::string, Eigen::Vector2d> viewpoints_;
+  std::map<std::string, double> depth_error_per_m2_;  // MergeVehicleParts' depth error by source
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<SideDetector> left_, right_;
   std::unique_ptr<RearDetector> left_rear_, right_rear_;
