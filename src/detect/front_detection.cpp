@@ -53,6 +53,7 @@ FrontDetector::FrontDetector(const Rig& rig, const FrontDetectorOptions& options
   options_.histogram.max_disparity = options.stereo.min_disparity + options.stereo.num_disparities;
   options_.histogram.two_sided = false;
   options_.histogram.link_max_gap = ViewColumns(options.link_max_gap_deg, options.focal_px);
+  tall_min_columns_ = ViewColumns(options.tall_min_width_deg, options.focal_px);
   options_.histogram.Check();
   spec_ = FrontViewSpec(rig, "left", "right", options.view_width, options.view_height, options.focal_px);
   left_ = std::make_unique<VirtualView>(rig.Camera("left"), spec_);
@@ -291,8 +292,7 @@ bool FrontDetector::StandsUp(const VirtualView& view, const FrontMatch& m, const
   if (heights.empty()) return false;
   std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
   return heights[heights.size() / 2] >= options_.min_obstacle_height_m ||
-         (c.x_end - c.x_begin >= ViewColumns(options_.tall_min_width_deg, options_.focal_px) &&
-          TopHeight(view, m, labels, c) >= options_.tall_min_top_m);
+         (c.x_end - c.x_begin >= tall_min_columns_ && TopHeight(view, m, labels, c) >= options_.tall_min_top_m);
 }
 
 void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, std::pair<int, int> valid_columns,

@@ -185,6 +185,7 @@ class FrontDetector {
   double vertical_offset_px_ = 0.0;
   int frames_ = 0;
   double baseline_m_ = 0.0;
+  int tall_min_columns_ = 0;  // tall_min_width_deg in the views' columns
   Reference by_left_, by_right_;
   // This frame's views prefiltered for matching (RenderViews), shared by the two references.
   SadStereoMatcher::PreparedView left_prepared_, right_prepared_;
