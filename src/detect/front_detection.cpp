@@ -44,6 +44,7 @@ void FrontDetectorOptions::Check() const {
   Require(drift_min_features >= 1, "drift_min_features", drift_min_features, ">= 1");
   Require(temporal_max_variance_px2 >= 0, "temporal_max_variance_px2", temporal_max_variance_px2, ">= 0 (0 = off)");
   Require(temporal_forgetting > 0 && temporal_forgetting <= 1, "temporal_forgetting", temporal_forgetting, "0 < f <= 1");
+  Require(range_edge_px >= 0, "range_edge_px", range_edge_px, ">= 0");
   stereo.Check();
 }
 
@@ -190,9 +191,11 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
   ++frames_;
 }
 
-void FrontDetector::MatchReference(FrontReference reference, FrontResult* r) {
+void FrontDetector::MatchReference(FrontReference reference, FrontResult* r, const cv::Mat& claimed) {
   const bool left = reference == FrontReference::kLeftView;
-  DetectWith(left ? by_left_ : by_right_, left ? &r->by_left : &r->by_right);
+  Reference& ref = left ? by_left_ : by_right_;
+  ref.claimed = claimed;
+  DetectWith(ref, left ? &r->by_left : &r->by_right);
 }
 
 void FrontDetector::CombineReferences(FrontResult* r) const {
@@ -242,6 +245,12 @@ cv::Mat FrontDetector::MatchReference(Reference& ref) {
   disparity.colRange(0, first).setTo(kInvalidDisparity);
   if (ref.mirrored) cv::flip(disparity, disparity, 1);
   disparity.setTo(kInvalidDisparity, ref.ignore);
+  if (!ref.claimed.empty()) disparity.setTo(kInvalidDisparity, ref.claimed);
+  if (options_.range_edge_px > 0) {
+    const double lo = options_.stereo.min_disparity + options_.range_edge_px;
+    const double hi = options_.stereo.min_disparity + options_.stereo.num_disparities - 1 - options_.range_edge_px;
+    disparity.setTo(kInvalidDisparity, (disparity < lo) | (disparity > hi));
+  }
   if (ref.temporal) disparity = ref.temporal->Apply(disparity);
   return disparity;
 }

@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "dps/stereo/virtual_view.h"
 #include "dps/util/error.h"
@@ -75,6 +76,38 @@ PipelineOptions DefaultPipelineOptions(const Rig& rig) {
   return o;
 }
 
+namespace {
+// A disparity within this of either end of a search range is where a match beyond the range ends
+// up, not a cost minimum (NearFrontOptions, ClaimedAtHalf); px.
+constexpr double kRangeEdgePx = 1.0;
+
+// The pixels of a half-size front view where the full-size view has a disparity below upper_px
+// (its range's end less kRangeEdgePx) in any of the 2x2 pixels under it: matched within that
+// range, nothing for the near pair (which would otherwise match what the full pair found too weak
+// to match, e.g. faint clouds, at its own nearer disparities).
+cv::Mat ClaimedAtHalf(const cv::Mat& disparity, double upper_px, cv::Size half) {
+  const cv::Mat matched = disparity < upper_px;  // kInvalidDisparity (+inf) is not
+  cv::Mat area;
+  cv::resize(matched, area, half, 0, 0, cv::INTER_AREA);
+  return area > 0;
+}
+}  // namespace
+
+FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front) {
+  FrontDetectorOptions o = front;
+  o.view_width = std::max(32, front.view_width / 2);
+  o.view_height = std::max(16, front.view_height / 2);
+  o.focal_px = front.focal_px * o.view_width / front.view_width;
+  const int end = front.stereo.min_disparity + front.stereo.num_disparities;
+  // One below half the end: past the edge dropped, the first kept disparity continues the range.
+  o.stereo.min_disparity = static_cast<int>(std::floor(end * o.focal_px / front.focal_px)) - 1;
+  o.stereo.num_disparities = std::max(16, (front.stereo.num_disparities / 2 + 15) / 16 * 16);
+  o.stereo.block_width = o.stereo.block_height = 7;
+  o.range_edge_px = kRangeEdgePx;
+  o.drift_interval = 0;
+  return o;
+}
+
 Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
   Coverage c;
   const Eigen::Vector3d l = rig.Camera("left").vehicle_from_camera.t, r = rig.Camera("right").vehicle_from_camera.t;
@@ -133,6 +166,7 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
   // Where each source looks from (the sectors' apexes), for MergeVehicleParts' see-through test.
   for (const Sector& s : coverage_.sectors) viewpoints_[s.name] = s.apex;
   front_ = std::make_unique<FrontDetector>(rig, options.front);
+  if (options.front_near) front_near_ = std::make_unique<FrontDetector>(rig, NearFrontOptions(options.front));
   // ... and the front pair's depth error there (the sides' changes with the speed every frame).
   depth_error_per_m2_["front"] = options.vehicle_disparity_slack_px / (options.front.focal_px * front_->baseline_m());
   if (options.sides) {
@@ -203,7 +237,23 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
   }
   const std::vector<double> task_ms = RunTasks(tasks);
   front_->CombineReferences(&out.front);
-  out.front_ms = front_views_ms + task_ms[0] + task_ms[1];
+  double near_ms = 0.0;
+  if (front_near_) {
+    // After the full-size pair: it fills only the pixels that pair did not match.
+    const auto near_start = now();
+    const double upper = options_.front.stereo.min_disparity + options_.front.stereo.num_disparities - 1 - kRangeEdgePx;
+    FrontResult near;
+    front_near_->RenderViews(grey[0], grey[1], &near);
+    const cv::Size half = near.left_view.size();
+    const cv::Mat claimed[2] = {ClaimedAtHalf(out.front.by_left.disparity, upper, half),
+                                ClaimedAtHalf(out.front.by_right.disparity, upper, half)};
+    RunTasks({[&] { front_near_->MatchReference(FrontReference::kLeftView, &near, claimed[0]); },
+              [&] { front_near_->MatchReference(FrontReference::kRightView, &near, claimed[1]); }});
+    front_near_->CombineReferences(&near);
+    for (const Detection& d : near.detections) out.front.detections.push_back(d);
+    near_ms = ms(near_start, now());
+  }
+  out.front_ms = front_views_ms + task_ms[0] + task_ms[1] + near_ms;
   const size_t sides_end = tasks.size() - (lanes_ ? 1 : 0) - (left_rear_ ? 1 : 0);
   out.rears_ms = left_rear_ ? task_ms[tasks.size() - (lanes_ ? 2 : 1)] : 0.0;
   out.sides_ms = sides ? task_ms[sides_end - 2] + task_ms[sides_end - 1] : 0.0;

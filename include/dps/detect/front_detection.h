@@ -67,6 +67,9 @@ struct FrontDetectorOptions {
   // by more than this variance are suppressed; 0 = off.
   double temporal_max_variance_px2 = 4.0;
   double temporal_forgetting = 0.5;
+  // Disparities within this of either end of the search range are dropped: a cost minimum at the
+  // range's edge is where a match beyond the range ends up, not a minimum. px; 0 = none kept out.
+  double range_edge_px = 0.0;
 
   // Throws dps::Error naming the field, its value and the violated constraint (the stereo and
   // histogram options included).
@@ -122,7 +125,9 @@ class FrontDetector {
   // reference (the two may run at once); the detections of both. Steps of one frame in this
   // order, frames in order.
   void RenderViews(const cv::Mat& left_omni, const cv::Mat& right_omni, FrontResult* r);
-  void MatchReference(FrontReference reference, FrontResult* r);
+  // `claimed` (optional, the views' size): pixels another matching already gave a disparity,
+  // left unmatched here (NearFrontOptions: the near pair fills what the full pair did not match).
+  void MatchReference(FrontReference reference, FrontResult* r, const cv::Mat& claimed = cv::Mat());
   void CombineReferences(FrontResult* r) const;
 
   // The ground point (vehicle frame x, z) of left view column x at disparity d (eq. 16); false
@@ -147,6 +152,7 @@ class FrontDetector {
     SadStereoMatcher::PreparedView mirrored_reference, mirrored_other;  // the right view's, mirrored
     std::vector<Detection> found;               // this frame's components on its side
     std::vector<Detection> beyond;              // the left view's wholly beyond the left camera
+    cv::Mat claimed;                            // this frame's MatchReference `claimed`
   };
   // Road, ramp and ignore mask of both references (after the views are built or rebuilt), and of
   // one, given the own car as both views see it.

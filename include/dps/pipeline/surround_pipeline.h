@@ -25,6 +25,10 @@ struct PipelineOptions {
   FrontDetectorOptions front;
   SideDetectorOptions side;
   bool sides = true;           // run motion stereo on the side views
+  // Also match the front pair at half its views' size over the disparities beyond its range
+  // (NearFrontOptions), where it left pixels unmatched: objects nearer than f B / (its largest
+  // disparity), e.g. a car stopping close ahead.
+  bool front_near = true;
   RearDetectorOptions rear;
   // Look behind the mirrors with each camera's rear view (rear_detection.h). Off by default: it
   // adds more false detections than it finds (docs/detection.md).
@@ -56,6 +60,14 @@ struct PipelineOptions {
 // 9x9 windows; proportionally smaller views, ranges (multiples of 16) and windows for smaller
 // images (e.g. 200x100, f = 85 px, 48 disparities, 7x7 at the paper's 320x240).
 PipelineOptions DefaultPipelineOptions(const Rig& rig);
+
+// The front pair's options for objects nearer than `front` reaches: views of half the size and
+// focal length (the field of view kept) with the windows of views that size (7x7), searching from
+// where `front`'s range ends (half its disparity there) over half as many disparities, which is
+// `front`'s range over again at full size: objects down to half its nearest distance (1.8 m from
+// the cameras at 640x480 with a 2 m baseline). Disparities within a pixel of either end of that
+// search are dropped (FrontDetectorOptions::range_edge_px); no drift correction of its own.
+FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front);
 
 // The ground sectors the pipeline processes (for the map and for dps-eval's field of view): the
 // front pair from the cameras' midpoint, beginning where both cameras' views overlap; each side
@@ -114,6 +126,7 @@ class SurroundPipeline {
   std::map<std::string, Eigen::Vector2d> viewpoints_;
   std::map<std::string, double> depth_error_per_m2_;  // MergeVehicleParts' depth error by source
   std::unique_ptr<FrontDetector> front_;
+  std::unique_ptr<FrontDetector> front_near_;  // NearFrontOptions; null when off
   std::unique_ptr<SideDetector> left_, right_;
   std::unique_ptr<RearDetector> left_rear_, right_rear_;
   std::unique_ptr<LaneDetector> lanes_;
