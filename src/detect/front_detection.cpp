@@ -193,9 +193,7 @@ void FrontDetector::RenderViews(const cv::Mat& left_omni, const cv::Mat& right_o
 
 void FrontDetector::MatchReference(FrontReference reference, FrontResult* r, const cv::Mat& claimed) {
   const bool left = reference == FrontReference::kLeftView;
-  Reference& ref = left ? by_left_ : by_right_;
-  ref.claimed = claimed;
-  DetectWith(ref, left ? &r->by_left : &r->by_right);
+  DetectWith(left ? by_left_ : by_right_, claimed, left ? &r->by_left : &r->by_right);
 }
 
 void FrontDetector::CombineReferences(FrontResult* r) const {
@@ -225,7 +223,7 @@ void FrontDetector::CombineReferences(FrontResult* r) const {
   for (size_t i = 0; i < r->detections.size(); ++i) r->detections[i].id = static_cast<int>(i);
 }
 
-cv::Mat FrontDetector::MatchReference(Reference& ref) {
+cv::Mat FrontDetector::MatchReference(Reference& ref, const cv::Mat& claimed) {
   // The reference's columns that can show its objects, from ref.first on (the right view's
   // mirrored), against the whole other view.
   const SadStereoMatcher::PreparedView* reference = &left_prepared_;
@@ -245,7 +243,7 @@ cv::Mat FrontDetector::MatchReference(Reference& ref) {
   disparity.colRange(0, first).setTo(kInvalidDisparity);
   if (ref.mirrored) cv::flip(disparity, disparity, 1);
   disparity.setTo(kInvalidDisparity, ref.ignore);
-  if (!ref.claimed.empty()) disparity.setTo(kInvalidDisparity, ref.claimed);
+  if (!claimed.empty()) disparity.setTo(kInvalidDisparity, claimed);
   if (options_.range_edge_px > 0) {
     const double lo = options_.stereo.min_disparity + options_.range_edge_px;
     const double hi = options_.stereo.min_disparity + options_.stereo.num_disparities - 1 - options_.range_edge_px;
@@ -342,9 +340,9 @@ void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, s
   into.push_back(std::move(det));
 }
 
-void FrontDetector::DetectWith(Reference& ref, FrontMatch* m) {
+void FrontDetector::DetectWith(Reference& ref, const cv::Mat& claimed, FrontMatch* m) {
   const VirtualView& view = *ref.view;
-  m->disparity = MatchReference(ref);
+  m->disparity = MatchReference(ref, claimed);
   m->score = ScoreImage(m->disparity, ref.road, options_.histogram, ref.ramp);
   cv::Mat moments, labels;
   m->histogram = ColumnHistogram(m->disparity, m->score, options_.histogram, &moments);

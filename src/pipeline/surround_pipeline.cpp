@@ -19,6 +19,10 @@ namespace {
 
 constexpr double kMaxViewScale = 1.25;
 
+// The matching window for views `scale` times the 400x200 ones: 9x9 from three quarters of that
+// size on, 7x7 below (fewer pixels per window as the views shrink).
+int WindowForViewScale(double scale) { return scale >= 0.75 ? 9 : 7; }
+
 // Runs each task once on up to cv::getNumThreads() workers, each taking the next task until none
 // is left; returns each task's milliseconds, and rethrows the first failed task's exception (in
 // task order) once all have run. Each task's own cv::parallel_for_ then runs serially inside it
@@ -61,7 +65,7 @@ PipelineOptions DefaultPipelineOptions(const Rig& rig) {
   // 96 disparities at 640 px: with a 2 m baseline and f = 170 px the front pair then sees down to
   // 3.5 m, and the side pairs cover vehicles passing at up to about 7 m/s relative speed (15 fps).
   const int d = std::max(16, static_cast<int>(std::lround(96 * s / 16.0)) * 16);
-  const int block = s >= 0.75 ? 9 : 7;
+  const int block = WindowForViewScale(s);
   for (StereoOptions* st : {&o.front.stereo, &o.side.stereo}) {
     st->num_disparities = d;
     st->block_width = st->block_height = block;
@@ -102,7 +106,7 @@ FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front) {
   // One below half the end: past the edge dropped, the first kept disparity continues the range.
   o.stereo.min_disparity = static_cast<int>(std::floor(end * o.focal_px / front.focal_px)) - 1;
   o.stereo.num_disparities = std::max(16, (front.stereo.num_disparities / 2 + 15) / 16 * 16);
-  o.stereo.block_width = o.stereo.block_height = 7;
+  o.stereo.block_width = o.stereo.block_height = WindowForViewScale(o.view_width / 400.0);
   o.range_edge_px = kRangeEdgePx;
   o.drift_interval = 0;
   return o;

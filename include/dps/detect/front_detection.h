@@ -152,7 +152,6 @@ class FrontDetector {
     SadStereoMatcher::PreparedView mirrored_reference, mirrored_other;  // the right view's, mirrored
     std::vector<Detection> found;               // this frame's components on its side
     std::vector<Detection> beyond;              // the left view's wholly beyond the left camera
-    cv::Mat claimed;                            // this frame's MatchReference `claimed`
   };
   // Road, ramp and ignore mask of both references (after the views are built or rebuilt), and of
   // one, given the own car as both views see it.
@@ -160,12 +159,13 @@ class FrontDetector {
   void Prepare(const cv::Mat& own_car, Reference* ref) const;
   // Matches the pair with `ref` as reference over its columns, finds the components and keeps
   // those on its side in ref.found (the left view's wholly beyond the left camera in ref.beyond).
-  void DetectWith(Reference& ref, FrontMatch* m);
+  // `claimed`: as MatchReference's (empty: none).
+  void DetectWith(Reference& ref, const cv::Mat& claimed, FrontMatch* m);
   // The steps of DetectWith: the reference's disparity (masked, temporally filtered); whether two
   // parts of the histogram are one surface; whether a component stands up from the road; and a
   // component kept as a detection of `ref` when it lies on its side, with its height (TopHeight less
   // the half window the matcher carries its disparity above its top edge).
-  cv::Mat MatchReference(Reference& ref);
+  cv::Mat MatchReference(Reference& ref, const cv::Mat& claimed);
   bool Linked(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& a, int x0,
               float d0, const HistogramComponent& b, int x1, float d1) const;
   bool StandsUp(const VirtualView& view, const FrontMatch& m, const cv::Mat& labels, const HistogramComponent& c) const;

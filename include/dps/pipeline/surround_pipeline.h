@@ -62,11 +62,12 @@ struct PipelineOptions {
 PipelineOptions DefaultPipelineOptions(const Rig& rig);
 
 // The front pair's options for objects nearer than `front` reaches: views of half the size and
-// focal length (the field of view kept) with the windows of views that size (7x7), searching from
-// where `front`'s range ends (half its disparity there) over half as many disparities, which is
-// `front`'s range over again at full size: objects down to half its nearest distance (1.8 m from
-// the cameras at 640x480 with a 2 m baseline). Disparities within a pixel of either end of that
-// search are dropped (FrontDetectorOptions::range_edge_px); no drift correction of its own.
+// focal length (the field of view kept) with the windows DefaultPipelineOptions picks for views
+// that size (7x7), searching from where `front`'s range ends (half its disparity there) over half
+// as many disparities, which is `front`'s range over again at full size: objects down to half its
+// nearest distance (1.8 m from the cameras at 640x480 with a 2 m baseline). Disparities within a
+// pixel of either end of that search are dropped (FrontDetectorOptions::range_edge_px); no drift
+// correction of its own.
 FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front);
 
 // The ground sectors the pipeline processes (for the map and for dps-eval's field of view): the
