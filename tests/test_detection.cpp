@@ -882,12 +882,43 @@ void TestOptionChecks() {
   CHECK_THROWS_WITH(dps::Evaluate({}, {}, evaluation), dps::Error, "evaluation option max_range_m = 0");
 }
 
+// The front pair's detections behind a nearer one of its own, seen from the cameras' midpoint
+// (0, 0), 1 m high: a truck's back 4.6 m ahead (x -1.4..1.4, 2.0 m high) hides a narrow part at
+// 12.8 m (x 0..0.2) 2.5 m high - below the sight line over the truck's top there (3.7 m) - and
+// one at 7.7 m; a pole at 12.8 m reaching 5 m rises above that line, a part at 9 m off the truck's
+// bearings is beside it, a part 0.2 m behind the back is within the depth error (one object's
+// face), a side camera's detection is another viewpoint's, and one without a height is unknown:
+// all kept.
+void TestHidden() {
+  auto part = [](double x0, double x1, double z, double height, const char* source) {
+    std::vector<Eigen::Vector2d> p;
+    for (int i = 0; i <= 10; ++i) p.emplace_back(x0 + (x1 - x0) * i / 10.0, z);
+    dps::Detection d = dps::DetectionFromPoints(p, source);
+    d.height_m = height;
+    return d;
+  };
+  const double k = 0.5 / (170 * 2.0);
+  const std::vector<dps::Detection> in = {
+      part(-1.4, 1.4, 4.6, 2.0, "front"),  part(0.0, 0.2, 12.8, 2.5, "front"), part(-0.2, -0.1, 7.7, 1.6, "front"),
+      part(0.3, 0.5, 12.8, 5.0, "front"),  part(2.5, 3.0, 9.0, 1.5, "front"),  part(-0.5, 0.5, 4.8, 1.2, "front"),
+      part(0.0, 0.2, 12.8, 2.5, "left"),   part(0.6, 0.8, 12.8, std::nan(""), "front")};
+  const std::vector<dps::Detection> out = dps::DropHidden(in, "front", Eigen::Vector2d(0, 0), 1.0, k);
+  CHECK_EQ(out.size(), size_t{6});
+  for (const dps::Detection& d : out) {
+    CHECK(!(d.source == "front" && std::abs(d.z_m - 12.8) < 1e-9 && d.x_m < 0.25));
+    CHECK(!(std::abs(d.z_m - 7.7) < 1e-9));
+  }
+  // The truck's back gone (not found this frame): nothing hides them.
+  CHECK_EQ(dps::DropHidden({in.begin() + 1, in.end()}, "front", Eigen::Vector2d(0, 0), 1.0, k).size(), size_t{7});
+}
+
 int main() {
   TestOptionChecks();
   TestHistogram();
   TestLinking();
   TestFrontProjection();
   TestFusion();
+  TestHidden();
   TestVisibility();
   TestEvaluation();
   TestFrontCoverage();

@@ -208,4 +208,45 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> d, double max_le
   return d;
 }
 
+std::vector<Detection> DropHidden(std::vector<Detection> detections, const std::string& source,
+                                  const Eigen::Vector2d& eye, double eye_height_m, double depth_error_per_m2) {
+  // Each detection's bearings from eye (atan2(x, z), no view looks straight back) and ranges.
+  struct Seen {
+    bool counts = false;
+    double first = std::numeric_limits<double>::infinity(), last = -first, near = first, far = 0.0;
+  };
+  std::vector<Seen> seen(detections.size());
+  for (size_t i = 0; i < detections.size(); ++i) {
+    const Detection& d = detections[i];
+    Seen& s = seen[i];
+    s.counts = d.source == source && std::isfinite(d.height_m);
+    for (const Eigen::Vector2d& p : PointsOf(d)) {
+      const Eigen::Vector2d v = p - eye;
+      s.first = std::min(s.first, std::atan2(v.x(), v.y()));
+      s.last = std::max(s.last, std::atan2(v.x(), v.y()));
+      s.near = std::min(s.near, v.norm());
+      s.far = std::max(s.far, v.norm());
+    }
+  }
+  const auto hides = [&](size_t front, size_t behind) {
+    const Seen &a = seen[front], &b = seen[behind];
+    if (!(a.first <= b.first && b.last <= a.last)) return false;
+    if (b.near - a.far <= depth_error_per_m2 * (a.far * a.far + b.near * b.near)) return false;
+    // The sight line over a's top, at b's nearest point.
+    const double sight = eye_height_m + (detections[front].height_m - eye_height_m) * b.near / a.far;
+    return detections[behind].height_m < sight;
+  };
+  std::vector<char> hidden(detections.size(), 0);
+  for (size_t i = 0; i < detections.size(); ++i) {
+    for (size_t j = 0; j < detections.size() && seen[i].counts && !hidden[i]; ++j) {
+      hidden[i] = j != i && seen[j].counts && hides(j, i);
+    }
+  }
+  std::vector<Detection> kept;
+  for (size_t i = 0; i < detections.size(); ++i) {
+    if (!hidden[i]) kept.push_back(std::move(detections[i]));
+  }
+  return kept;
+}
+
 }  // namespace dps

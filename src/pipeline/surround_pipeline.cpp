@@ -268,7 +268,10 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
 }
 
 void SurroundPipeline::Collect(const FrameInput& in, bool sides, const cv::Mat grey[2], FrameOutput* out) {
-  out->detections = out->front.detections;
+  // What the front pair reports behind a nearer object of its own, seen from the cameras' midpoint.
+  const Eigen::Vector3d l = rig_.Camera("left").vehicle_from_camera.t, r = rig_.Camera("right").vehicle_from_camera.t;
+  out->detections = DropHidden(out->front.detections, "front", Eigen::Vector2d((l.x() + r.x()) / 2, (l.z() + r.z()) / 2),
+                               -(l.y() + r.y()) / 2, depth_error_per_m2_.at("front"));
   out->coverage.sectors.push_back(coverage_.sectors.front());
   for (const SideResult* s : {&out->left, &out->right}) {
     if (!sides || s->skipped) continue;

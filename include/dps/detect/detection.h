@@ -74,4 +74,14 @@ std::vector<Detection> MergeVehicleParts(std::vector<Detection> detections, doub
                                          const std::map<std::string, Eigen::Vector2d>& viewpoints = {},
                                          const std::map<std::string, double>& depth_error_per_m2 = {});
 
+// Drops the detections of `source` that lie wholly behind another of its detections as seen from
+// `eye` (x, z; the source's cameras, eye_height_m above the road): within that one's bearings,
+// farther from eye than it by more than the depth error (depth_error_per_m2 x r^2 at each, as
+// MergeVehicleParts) and with their top below the sight line over its top. An opaque object hides
+// what lies there; what stereo reports there was matched on the object's face at the wrong
+// disparity (a repeated texture, e.g. the ribs of a truck's back close ahead). Detections without
+// a measured height neither hide nor are hidden.
+std::vector<Detection> DropHidden(std::vector<Detection> detections, const std::string& source,
+                                  const Eigen::Vector2d& eye, double eye_height_m, double depth_error_per_m2);
+
 }  // namespace dps
