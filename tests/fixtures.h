@@ -1,5 +1,6 @@
 // dps — set-up the tests share: the source tree's data, the shipped rig, small renders of the
-// shipped scenes, scratch folders, and what geometry predicts for a drifted camera.
+// shipped scenes and their frames as the pipeline takes them, scratch folders, and what geometry
+// predicts for a drifted camera.
 #pragma once
 
 #include <cmath>
@@ -9,8 +10,10 @@
 #include <Eigen/Core>
 
 #include "dps/camera/rig_io.h"
+#include "dps/pipeline/surround_pipeline.h"
 #include "dps/stereo/virtual_view.h"
 #include "dps/synth/scene_io.h"
+#include "dps/synth/scene_renderer.h"
 
 namespace dps_test {
 
@@ -28,6 +31,21 @@ inline dps::Scene SmallScene(const std::string& name, int width = 0, int height 
   if (width > 0 && height > 0) dps::ResizeScene(&scene, width, height);
   scene.render.supersample = 1;
   return scene;
+}
+
+// Frame f of a rendered scene (its state `state`) as the pipeline takes it: the images of the rig's
+// cameras `left` and `right` (indices) and the ego motion since the previous frame (none for the
+// first).
+inline dps::FrameInput RenderedInput(const dps::Scene& scene, const dps::SceneRenderer& renderer,
+                                     const dps::FrameState& state, int f, int left = 0, int right = 1) {
+  dps::FrameInput in;
+  in.frame = f;
+  in.t_s = scene.FrameTime(f);
+  in.left = renderer.Render(state, left, f).image;
+  in.right = renderer.Render(state, right, f).image;
+  in.motion_known = f > 0;
+  if (f > 0) in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(f - 1), in.t_s);
+  return in;
 }
 
 // An empty folder of this name under the system's temporary folder.

@@ -545,12 +545,7 @@ void TestNearFront() {
     nearest_error[near] = 1e9;
     for (int f = 0; f < scene.FrameCount(); ++f) {
       const dps::FrameState st = renderer.StateAt(scene.FrameTime(f));
-      dps::FrameInput in;
-      in.frame = f;
-      in.t_s = scene.FrameTime(f);
-      in.left = renderer.Render(st, 0, f).image;
-      in.right = renderer.Render(st, 1, f).image;
-      const dps::FrameOutput out = pipeline.Process(in);
+      const dps::FrameOutput out = pipeline.Process(dps_test::RenderedInput(scene, renderer, st, f));
       if (f < 2) continue;
       ++frames;
       const dps::TruthRow truth = dps::TruthAt(st, f).at(0);

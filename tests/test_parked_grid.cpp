@@ -49,13 +49,7 @@ void TestParkedCarsGrid() {
   dps::FrameState state;
   for (int f = 0; f < frames; ++f) {
     state = renderer.StateAt(scene.FrameTime(f));
-    dps::FrameInput in;
-    in.frame = f;
-    in.t_s = scene.FrameTime(f);
-    in.left = renderer.Render(state, left, f).image;
-    in.right = renderer.Render(state, right, f).image;
-    in.motion_known = f > 0;
-    if (f > 0) in.current_in_previous = scene.ego.Integrate(dps::PlanarPose{}, scene.FrameTime(f - 1), in.t_s);
+    const dps::FrameInput in = dps_test::RenderedInput(scene, renderer, state, f, left, right);
     const dps::FrameOutput out = pipeline.Process(in);
     grid.Update(in.t_s, state.ego, out.coverage, out.detections);
     std::vector<std::function<void()>> alongside;

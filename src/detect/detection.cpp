@@ -222,10 +222,11 @@ std::vector<Detection> DropHidden(std::vector<Detection> detections, const std::
     s.counts = d.source == source && std::isfinite(d.height_m);
     for (const Eigen::Vector2d& p : PointsOf(d)) {
       const Eigen::Vector2d v = p - eye;
-      s.first = std::min(s.first, std::atan2(v.x(), v.y()));
-      s.last = std::max(s.last, std::atan2(v.x(), v.y()));
-      s.near = std::min(s.near, v.norm());
-      s.far = std::max(s.far, v.norm());
+      const double bearing = std::atan2(v.x(), v.y()), range = v.norm();
+      s.first = std::min(s.first, bearing);
+      s.last = std::max(s.last, bearing);
+      s.near = std::min(s.near, range);
+      s.far = std::max(s.far, range);
     }
   }
   const auto hides = [&](size_t front, size_t behind) {

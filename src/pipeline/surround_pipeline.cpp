@@ -173,6 +173,10 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
   if (options.front_near) front_near_ = std::make_unique<FrontDetector>(rig, NearFrontOptions(options.front));
   // ... and the front pair's depth error there (the sides' changes with the speed every frame).
   depth_error_per_m2_["front"] = options.vehicle_disparity_slack_px / (options.front.focal_px * front_->baseline_m());
+  // The front pair looks from its cameras' midpoint (DropHidden).
+  const Eigen::Vector3d eye = (rig.Camera("left").vehicle_from_camera.t + rig.Camera("right").vehicle_from_camera.t) / 2;
+  front_eye_ = Eigen::Vector2d(eye.x(), eye.z());
+  front_eye_height_m_ = -eye.y();
   if (options.sides) {
     left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
     right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
@@ -268,10 +272,9 @@ FrameOutput SurroundPipeline::Process(const FrameInput& in, const std::vector<st
 }
 
 void SurroundPipeline::Collect(const FrameInput& in, bool sides, const cv::Mat grey[2], FrameOutput* out) {
-  // What the front pair reports behind a nearer object of its own, seen from the cameras' midpoint.
-  const Eigen::Vector3d l = rig_.Camera("left").vehicle_from_camera.t, r = rig_.Camera("right").vehicle_from_camera.t;
-  out->detections = DropHidden(out->front.detections, "front", Eigen::Vector2d((l.x() + r.x()) / 2, (l.z() + r.z()) / 2),
-                               -(l.y() + r.y()) / 2, depth_error_per_m2_.at("front"));
+  // What the front pair reports behind a nearer object of its own.
+  out->detections = DropHidden(out->front.detections, "front", front_eye_, front_eye_height_m_,
+                               depth_error_per_m2_.at("front"));
   out->coverage.sectors.push_back(coverage_.sectors.front());
   for (const SideResult* s : {&out->left, &out->right}) {
     if (!sides || s->skipped) continue;

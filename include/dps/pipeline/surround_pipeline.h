@@ -126,6 +126,8 @@ class SurroundPipeline {
   Coverage coverage_;
   std::map<std::string, Eigen::Vector2d> viewpoints_;
   std::map<std::string, double> depth_error_per_m2_;  // MergeVehicleParts' depth error by source
+  Eigen::Vector2d front_eye_{0, 0};  // the front cameras' midpoint (x, z) and its height (DropHidden)
+  double front_eye_height_m_ = 0.0;
   std::unique_ptr<FrontDetector> front_;
   std::unique_ptr<FrontDetector> front_near_;  // NearFrontOptions; null when off
   std::unique_ptr<SideDetector> left_, right_;
