@@ -323,14 +323,17 @@ void FrontDetector::Keep(const VirtualView& view, const HistogramComponent& c, s
   if (points.empty()) return;
   const bool beyond = reach < 0;
   if (ref.mirrored && !beyond) return;
+  // The object's top above the road (object_attributes.h classes by it), less the half window the
+  // matcher carries the object's disparity above its top edge. An obstacle's top stands
+  // min_obstacle_height_m above the road as the side views require (a kerb or a raised pavement
+  // beside the road, matched at its own disparity with the windows' fattening, does not).
+  const double top = TopHeight(view, *m, labels, c, options_.stereo.block_height / 2);
+  if (top < options_.min_obstacle_height_m) return;
   for (const auto& [x, d] : columns) {
     const int row = static_cast<int>((d - options_.histogram.min_disparity) / options_.histogram.bin_px);
     if (row >= 0 && row < m->obstacle.rows) m->obstacle.at<float>(row, x) = d;
   }
   Detection det = DetectionFromPoints(points, "front");
-  // The object's top above the road (object_attributes.h classes by it), less the half window the
-  // matcher carries the object's disparity above its top edge.
-  const double top = TopHeight(view, *m, labels, c, options_.stereo.block_height / 2);
   det.height_m = std::isfinite(top) ? std::max(0.0, top) : top;
   const int margin = options_.stereo.block_width;
   if (c.x_begin <= valid_columns.first + margin) det.clipped_ends.push_back(points.front());

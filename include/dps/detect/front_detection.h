@@ -49,7 +49,10 @@ struct FrontDetectorOptions {
   double max_range_m = 60.0;   // points farther than this are dropped
   double own_car_height_m = 0.9;  // the own car's box for masking the bonnet (see OwnCarMask)
   // Components whose pixels reach less than this above the road (median over columns) are flat
-  // (markings, mismatched road) and dropped; metres, >= 0.
+  // (markings, mismatched road) and dropped, and so are those whose top (TopHeight less the half
+  // window of fattening above it) is lower: a kerb or a raised pavement beside the road, matched
+  // with the windows' fattening above and below it, reaches the height but is no obstacle (the side
+  // views hold their components to the same); metres, >= 0.
   double min_obstacle_height_m = 0.5;
   // ... unless at least tall_min_width_deg of the view wide (columns as for link_max_gap_deg) with
   // a top (TopHeight) at least tall_min_top_m high: a car's long side seen at a grazing angle is
