@@ -59,6 +59,7 @@ struct Contact {
   Eigen::Vector2d ground{0, 0};
   double depth = 0.0, disparity = 0.0, height = 0.0, reach = 0.0, row_depth = 0.0;
   bool solid = true;
+  bool placed_static = false;  // depth from StaticDepth (the row and the disparity combined)
 };
 
 // A rigid object that moves parallel to the views (or stands still) has, in every column,
@@ -93,6 +94,32 @@ std::vector<Contact> ContinuousContacts(const std::vector<Contact>& contacts, do
     if (before || after) kept.push_back(contacts[i]);
   }
   return kept;
+}
+
+// Each contact placed by its disparity (StaticDepth) moved along its column (ColumnToGround) to the
+// median depth of such contacts within `half_window` columns of it. The matching windows of those
+// columns overlap its own, so they measure one stretch of the object with errors that are not
+// independent, and each column's row scatters (a row spans D^2 / (f h) of road at depth D): the
+// component's nearest point, what the map reports, would be the extreme of that scatter - a thin
+// pole or a wall's face at slow speed placed up to a metre short. The median keeps an object's
+// corners and ends (a step in depth stays a step). Contacts placed by their rows alone (moving
+// objects, objects keeping pace) keep their rows: their trims already move them half a window up,
+// and a median over them put a car keeping pace 0.5 m beyond its side
+// (docs/experiments/detection-history.md).
+std::vector<Contact> MedianContacts(std::vector<Contact> contacts, int half_window, const VirtualView& reference,
+                                    double baseline_m) {
+  std::vector<Eigen::Vector2d> moved;
+  for (const Contact& k : contacts) {
+    moved.push_back(k.ground);
+    if (!k.placed_static) continue;
+    std::vector<double> near;
+    for (size_t j = 0; j < contacts.size(); ++j) {
+      if (contacts[j].placed_static && std::abs(contacts[j].x - k.x) <= half_window) near.push_back(contacts[j].depth);
+    }
+    ColumnToGround(reference, k.x, reference.spec().focal_px * baseline_m / Median(near), baseline_m, &moved.back());
+  }
+  for (size_t i = 0; i < contacts.size(); ++i) contacts[i].ground = moved[i];
+  return contacts;
 }
 
 // What the contact search of one matched pair reads.
@@ -237,6 +264,7 @@ std::vector<Contact> ComponentContacts(const ContactSearch& s, const HistogramCo
         ColumnToGround(s.reference, x, spec.focal_px * s.baseline_m / depth, s.baseline_m, &ground)) {
       k.ground = ground;
       k.depth = depth;
+      k.placed_static = true;
     }
     // Part of placing static objects by their disparity: with rows alone the columns it leaves out
     // mostly stayed inside their object's detection, and leaving them out cost precision elsewhere.
@@ -520,6 +548,9 @@ SideResult SideDetector::Detect(const cv::Mat& previous_omni, const cv::Mat& cur
     std::vector<Contact> contacts = ComponentContacts(search, c);
     contacts = ConsistentContacts(std::move(contacts), options_.min_motion_disparity_px, options_.motion_tolerance);
     contacts = ContinuousContacts(contacts, options_.max_contact_jump_m);
+    if (options_.median_contacts) {
+      contacts = MedianContacts(std::move(contacts), options_.stereo.block_width / 2, *m.reference, r.baseline_m);
+    }
     std::vector<Eigen::Vector2d> points;
     std::vector<double> heights, tops, disparities;
     std::vector<const Contact*> kept;

@@ -78,6 +78,11 @@ struct SideDetectorOptions {
   // (disparity near zero), and one such point 3 m short becomes the detection's nearest point.
   // m, > 0.
   double max_contact_jump_m = 1.0;
+  // Each contact a static object's disparity placed (static_gate) moved to the median depth of such
+  // contacts within half a matching window of columns (side_detection.cpp, MedianContacts): the
+  // component's nearest point is then not the extreme of its columns' scatter. false: every
+  // column's contact as placed.
+  bool median_contacts = true;
   double disparity_sigma_px = 1.0;    // matching noise: the velocity's uncertainty, a static depth's error
   // A contact whose depth agrees with the depth a static object at its disparity would have (f B /
   // d), within this many standard deviations of the two, is a static object's: its depth is the
