@@ -236,6 +236,23 @@ void TestLossyVideo() {
 }
 
 // A fixed subset of the report set at 320x240, through dps-process's path and dps-eval's scoring.
+// A randomised drive written as dps-synth --randomize writes it (work/drives/NAME: images or video
+// as drawn, rig.yaml with the drawn calibration error) and processed as dps-process does it
+// (work/out/NAME, no map video).
+dps::DriveSummary SynthesizeAndProcess(const dps::RandomizedScene& r, const std::filesystem::path& work,
+                                       const std::string& name) {
+  const std::string drive = (work / "drives" / name).string();
+  dps::SynthOptions so;
+  so.processing_rig = r.processing_rig;
+  so.write_video = r.video;
+  so.write_png = !r.video;
+  if (r.video) so.video_codec = r.video_codec;
+  dps::Synthesize(r.scene, drive, so);
+  dps::DriveOptions po;
+  po.map_video = false;
+  return dps::ProcessDrive(drive, (work / "out").string(), po);
+}
+
 void TestSubset() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness");
   struct Case {
@@ -246,16 +263,8 @@ void TestSubset() {
                         Case{"empty_road", 1003}}) {
     const dps::RandomizedScene r = dps::Randomize(dps_test::SmallScene(c.family, 320, 240), c.seed);
     const std::string name = std::string(c.family) + "_" + std::to_string(c.seed);
+    const dps::DriveSummary s = SynthesizeAndProcess(r, work, name);
     const std::string drive = (work / "drives" / name).string();
-    dps::SynthOptions so;
-    so.processing_rig = r.processing_rig;
-    so.write_video = r.video;
-    so.write_png = !r.video;
-    if (r.video) so.video_codec = r.video_codec;
-    dps::Synthesize(r.scene, drive, so);
-    dps::DriveOptions po;
-    po.map_video = false;
-    const dps::DriveSummary s = dps::ProcessDrive(drive, (work / "out").string(), po);
     CHECK_EQ(s.frames, r.scene.FrameCount());
     dps::EvaluationOptions eo;
     eo.visibility = std::make_shared<const dps::Visibility>(r.scene.rig);
@@ -280,16 +289,7 @@ void TestRaisedPavement() {
   dps::ResizeScene(&scene, 640, 480);
   const dps::RandomizedScene r = dps::Randomize(scene, 6, dps::ReadRandomizeOptions(path));
   CHECK(Draw(r, "render.kerb_height_m") > 0.1);
-  const std::string drive = (work / "empty_road_6").string();
-  dps::SynthOptions so;
-  so.processing_rig = r.processing_rig;
-  so.write_video = r.video;
-  so.write_png = !r.video;
-  if (r.video) so.video_codec = r.video_codec;
-  dps::Synthesize(r.scene, drive, so);
-  dps::DriveOptions po;
-  po.map_video = false;
-  const dps::DriveSummary s = dps::ProcessDrive(drive, (work / "out").string(), po);
+  const dps::DriveSummary s = SynthesizeAndProcess(r, work, "empty_road_6");
   const double min_height = dps::FrontDetectorOptions().min_obstacle_height_m;
   std::set<int> frames;
   int low = 0;
