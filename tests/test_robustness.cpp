@@ -235,7 +235,6 @@ void TestLossyVideo() {
                     dps::Error, "XVID");
 }
 
-// A fixed subset of the report set at 320x240, through dps-process's path and dps-eval's scoring.
 // A randomised drive written as dps-synth --randomize writes it (work/drives/NAME: images or video
 // as drawn, rig.yaml with the drawn calibration error) and processed as dps-process does it
 // (work/out/NAME, no map video).
@@ -253,6 +252,7 @@ dps::DriveSummary SynthesizeAndProcess(const dps::RandomizedScene& r, const std:
   return dps::ProcessDrive(drive, (work / "out").string(), po);
 }
 
+// A fixed subset of the report set at 320x240, through dps-process's path and dps-eval's scoring.
 void TestSubset() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness");
   struct Case {
@@ -263,8 +263,8 @@ void TestSubset() {
                         Case{"empty_road", 1003}}) {
     const dps::RandomizedScene r = dps::Randomize(dps_test::SmallScene(c.family, 320, 240), c.seed);
     const std::string name = std::string(c.family) + "_" + std::to_string(c.seed);
-    const dps::DriveSummary s = SynthesizeAndProcess(r, work, name);
     const std::string drive = (work / "drives" / name).string();
+    const dps::DriveSummary s = SynthesizeAndProcess(r, work, name);
     CHECK_EQ(s.frames, r.scene.FrameCount());
     dps::EvaluationOptions eo;
     eo.visibility = std::make_shared<const dps::Visibility>(r.scene.rig);
