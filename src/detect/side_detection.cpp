@@ -106,19 +106,20 @@ std::vector<Contact> ContinuousContacts(const std::vector<Contact>& contacts, do
 // objects, objects keeping pace) keep their rows: their trims already move them half a window up,
 // and a median over them put a car keeping pace 0.5 m beyond its side
 // (docs/experiments/detection-history.md).
+// Contacts come in column order; only their ground points change, so the depths read stay the
+// measured ones.
 std::vector<Contact> MedianContacts(std::vector<Contact> contacts, int half_window, const VirtualView& reference,
                                     double baseline_m) {
-  std::vector<Eigen::Vector2d> moved;
-  for (const Contact& k : contacts) {
-    moved.push_back(k.ground);
+  size_t first = 0;
+  for (Contact& k : contacts) {
+    while (contacts[first].x < k.x - half_window) ++first;
     if (!k.placed_static) continue;
     std::vector<double> near;
-    for (size_t j = 0; j < contacts.size(); ++j) {
-      if (contacts[j].placed_static && std::abs(contacts[j].x - k.x) <= half_window) near.push_back(contacts[j].depth);
+    for (size_t j = first; j < contacts.size() && contacts[j].x <= k.x + half_window; ++j) {
+      if (contacts[j].placed_static) near.push_back(contacts[j].depth);
     }
-    ColumnToGround(reference, k.x, reference.spec().focal_px * baseline_m / Median(near), baseline_m, &moved.back());
+    ColumnToGround(reference, k.x, reference.spec().focal_px * baseline_m / Median(near), baseline_m, &k.ground);
   }
-  for (size_t i = 0; i < contacts.size(); ++i) contacts[i].ground = moved[i];
   return contacts;
 }
 
