@@ -45,6 +45,10 @@ One bad drive is reported and the others still run; the exit status is the numbe
   --rear                also look behind the mirrors: each camera's rear view against its earlier
                         frames, obstacles where they meet the road (docs/detection.md; experimental:
                         more false detections than found ones on the tuning drives)
+  --reach-forward       the side views also cover the road ahead that the front pair does not see
+                        (fisheyes looking sideways see ahead only at their fields' edges), by motion
+                        stereo up to 76 deg in front of their axes (docs/detection.md; off by
+                        default: more found ahead, at lower precision)
   --truncate            left and right differ: process the frame numbers both have
                         (image folders pair by file number; videos by position)
   --allow-gaps          a frame lost in recording - a number missing in an image folder, or
@@ -109,7 +113,7 @@ int main(int argc, char** argv) {
                              {"out", "list", "shard", "jobs", "image-fps", "speed-column", "speed-scale", "yaw-column",
                               "yaw-scale", "time-column", "yaw-file", "mask-seconds", "grid-every", "extrinsic-seconds"},
                              {"force", "map-png", "no-video", "truncate", "allow-gaps", "quiet", "diagnostics", "no-mask-estimate",
-                              "no-extrinsic-correction", "remember", "rear"});
+                              "no-extrinsic-correction", "remember", "rear", "reach-forward"});
     if (args.help()) {
       std::cout << kUsage;
       return 0;
@@ -134,6 +138,7 @@ int main(int argc, char** argv) {
     if (options.grid_every < 0) throw dps::Error("option --grid-every: expected >= 0");
     options.grid_obstacles = args.Has("remember");
     options.rear = args.Has("rear");
+    options.reach_forward = args.Has("reach-forward");
     options.truncate = args.Has("truncate");
     options.allow_frame_gaps = args.Has("allow-gaps");
     options.estimate_masks = !args.Has("no-mask-estimate");

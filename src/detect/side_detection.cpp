@@ -320,6 +320,8 @@ void SideDetectorOptions::Check() const {
   Require(pacing_persistence_m >= 0, "pacing_persistence_m", pacing_persistence_m, ">= 0 (0 = no test)");
   Require(max_vehicle_width_m >= 0, "max_vehicle_width_m", max_vehicle_width_m, ">= 0 (0 = no test)");
   Require(back_half_angle_deg >= 0 && back_half_angle_deg < 80, "back_half_angle_deg", back_half_angle_deg, "0 <= a < 80");
+  Require(forward_half_angle_deg >= 0 && forward_half_angle_deg < 80, "forward_half_angle_deg", forward_half_angle_deg,
+          "0 <= a < 80");
   Require(max_range_m > 0, "max_range_m", max_range_m, "> 0");
   Require(max_depth_m > 0, "max_depth_m", max_depth_m, "> 0");
   Require(own_car_height_m >= 0, "own_car_height_m", own_car_height_m, ">= 0");
@@ -358,9 +360,12 @@ namespace {
 // A side view's width and the share of its columns behind the principal column, at `scale`.
 std::pair<int, double> SideViewColumns(const SideDetectorOptions& o, double scale) {
   const int width = static_cast<int>(std::lround(o.view_width * scale));
-  if (o.back_half_angle_deg <= 0.0) return {width, 0.5};
-  const double front = (width - 1) / 2.0;
-  const double back = o.focal_px * scale * std::tan(o.back_half_angle_deg * kRadPerDeg);
+  if (o.back_half_angle_deg <= 0.0 && o.forward_half_angle_deg <= 0.0) return {width, 0.5};
+  // Each half as view_width gives, or focal_px x tan of its angle.
+  auto half = [&](double angle_deg) {
+    return angle_deg > 0.0 ? o.focal_px * scale * std::tan(angle_deg * kRadPerDeg) : (width - 1) / 2.0;
+  };
+  const double front = half(o.forward_half_angle_deg), back = half(o.back_half_angle_deg);
   const int total = static_cast<int>(std::lround(front + back)) + 1;
   return {total, (total - 1 - front) / (total - 1)};
 }

@@ -419,7 +419,10 @@ class PictureOutputs {
 // to correct and only adds its noise: it is off.
 PipelineOptions DrivePipelineOptions(const DriveOptions& o, const Rig& rig, const DriveSummary& s) {
   PipelineOptions p = o.default_pipeline ? DefaultPipelineOptions(rig) : o.pipeline;
-  if (o.default_pipeline) p.rears = o.rear;
+  if (o.default_pipeline) {
+    p.rears = o.rear;
+    if (o.reach_forward) p.side_forward_max_deg = kSideForwardReachDeg;
+  }
   bool verified = true;
   for (const char* camera : {"left", "right"}) {
     const auto it = s.extrinsics.find(camera);

@@ -112,6 +112,34 @@ FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front) {
   return o;
 }
 
+SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& o, Side side) {
+  SideDetectorOptions s = o.side;
+  const double given_deg = s.forward_half_angle_deg > 0.0
+                               ? s.forward_half_angle_deg
+                               : std::atan((s.view_width - 1) / 2.0 / s.focal_px) / kRadPerDeg;
+  if (o.side_forward_max_deg <= given_deg) return s;
+  const ViewSpec spec = FrontViewSpec(rig, "left", "right", o.front.view_width, o.front.view_height, o.front.focal_px);
+  const VirtualView left(rig.Camera("left"), spec), right(rig.Camera("right"), spec);
+  const int y = static_cast<int>(std::lround(spec.cy));
+  auto sees = [y](const VirtualView& v, int x) {
+    return v.mask().at<std::uint8_t>(y, x) != 0 && (v.own_car().empty() || v.own_car().at<std::uint8_t>(y, x) == 0);
+  };
+  // The bearing of the pair's outermost seen column on the side, from straight ahead towards the
+  // side (negative: beyond straight ahead); none seen: the side view reaches as far as it may.
+  double edge_deg = -90.0;
+  for (int i = 0; i < spec.width; ++i) {
+    const int x = side == Side::kLeft ? i : spec.width - 1 - i;
+    if (sees(left, x) && sees(right, x)) {
+      const Eigen::Vector3d ray = left.RayVehicle(x, y);
+      edge_deg = std::atan2(side == Side::kLeft ? -ray.x() : ray.x(), ray.z()) / kRadPerDeg;
+      break;
+    }
+  }
+  const double reach_deg = std::min(90.0 - edge_deg, o.side_forward_max_deg);
+  if (reach_deg > given_deg) s.forward_half_angle_deg = reach_deg;
+  return s;
+}
+
 Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
   Coverage c;
   const Eigen::Vector3d l = rig.Camera("left").vehicle_from_camera.t, r = rig.Camera("right").vehicle_from_camera.t;
@@ -129,8 +157,9 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
     // Each side view's columns that motion stereo matches, at the views' full size (at speed the
     // views shrink and their matched columns span less: SideResult::sector is each frame's).
     for (const auto& [name, side, at] : {std::make_tuple("left", Side::kLeft, l), std::make_tuple("right", Side::kRight, r)}) {
-      const ViewSpec view = SideDetectorViewSpec(side, o.side);
-      const auto [first, last] = SideMatchedColumns(side, view.width, o.side.stereo);
+      const SideDetectorOptions options = SideOptionsForRig(rig, o, side);
+      const ViewSpec view = SideDetectorViewSpec(side, options);
+      const auto [first, last] = SideMatchedColumns(side, view.width, options.stereo);
       c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last));
     }
   }
@@ -145,6 +174,8 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
 
 void PipelineOptions::Check() const {
   const OptionCheck Require("pipeline");
+  Require(side_forward_max_deg >= 0 && side_forward_max_deg < 80, "side_forward_max_deg", side_forward_max_deg,
+          "0 <= a < 80");
   Require(merge_distance_m >= 0, "merge_distance_m", merge_distance_m, ">= 0");
   Require(vehicle_length_m >= 0, "vehicle_length_m", vehicle_length_m, ">= 0 (0 = no merging)");
   Require(vehicle_width_m >= 0, "vehicle_width_m", vehicle_width_m, ">= 0");
@@ -178,8 +209,8 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
   front_eye_ = Eigen::Vector2d(eye.x(), eye.z());
   front_eye_height_m_ = -eye.y();
   if (options.sides) {
-    left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, options.side);
-    right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, options.side);
+    left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, SideOptionsForRig(rig, options, Side::kLeft));
+    right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, SideOptionsForRig(rig, options, Side::kRight));
   }
   if (options.rears) {
     left_rear_ = std::make_unique<RearDetector>(rig, "left", Side::kLeft, options.rear);

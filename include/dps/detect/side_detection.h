@@ -36,12 +36,15 @@
 namespace dps {
 
 struct SideDetectorOptions {
-  int view_width = 400;        // side view size, px (with back_half_angle_deg, its forward half twice)
+  int view_width = 400;        // side view size, px (with back_ or forward_half_angle_deg, the other half twice)
   int view_height = 200;
   double focal_px = 170.0;
   // > 0: the view reaches this far behind its axis instead of as far as in front (the blind spot
   // behind the mirrors), its width growing by focal_px x tan of it; deg, 0 <= a < 80.
   double back_half_angle_deg = 0.0;
+  // > 0: the view reaches this far in front of its axis instead (towards where the front pair does
+  // not see: SideOptionsForRig), its width growing the same way; deg, 0 <= a < 80.
+  double forward_half_angle_deg = 0.0;
   // The horizon's row as a fraction of the height: below it the view reaches 37 degrees down at
   // the defaults, so a camera 0.9 m high sees where objects 1.2 m away meet the road.
   double horizon_fraction = 0.35;

@@ -39,6 +39,10 @@ struct DriveOptions {
   // Each camera's rear view against its earlier frames (rear_detection.h; off by default:
   // docs/detection.md). Sets PipelineOptions::rears of the default pipeline.
   bool rear = false;
+  // The side views also cover the road ahead that the front pair does not see (sideways fisheyes:
+  // SideOptionsForRig; off by default: docs/detection.md). Sets PipelineOptions::side_forward_max_deg
+  // of the default pipeline to kSideForwardReachDeg.
+  bool reach_forward = false;
   bool truncate = false;          // left and right with different frames: keep the frame numbers both have
   // frames.csv with two consecutive frames more than max_frame_gap intervals (its median) apart -
   // a frame lost in recording - is an error naming them, unless allow_frame_gaps: then a warning,

@@ -37,6 +37,10 @@ struct PipelineOptions {
   bool lanes = true;           // find the lane markings beside the car (lane_detection.h)
   LaneTrackerOptions lane_tracking;
   bool track_lanes = true;     // ... and track them over time with the ego motion (lane_tracking.h)
+  // > 0: the side views reach forward over what the front pair does not see (SideOptionsForRig),
+  // at most this far in front of their axes (kSideForwardReachDeg); 0: as `side` gives. Off by
+  // default: docs/detection.md. deg, 0 <= a < 80.
+  double side_forward_max_deg = 0.0;
   double merge_distance_m = 1.5;  // detections this close are one object (FuseDetections)
   // Then parts that fit into one vehicle's footprint are one object (MergeVehicleParts);
   // vehicle_length_m = 0: no such merging.
@@ -69,6 +73,23 @@ PipelineOptions DefaultPipelineOptions(const Rig& rig);
 // pixel of either end of that search are dropped (FrontDetectorOptions::range_edge_px); no drift
 // correction of its own.
 FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front);
+
+// How far in front of their axes the side views may reach with PipelineOptions::side_forward_max_deg
+// (dps-process --reach-forward): tan 76 deg = 4 focal lengths, so a view at most 2.5 times as wide
+// as the default (its cost grows with its width); columns there sample the ground 1 / cos^2 = 17
+// times as finely as the view's axis, and the source image much more coarsely.
+constexpr double kSideForwardReachDeg = 76.0;
+
+// The side detector's options for one side of `rig`: the side view reaches forward
+// (forward_half_angle_deg) over the directions the front pair does not see on that side, at
+// least as far as options.side gives and at most side_forward_max_deg. The front pair sees a
+// column of its views where both views have a source that is not the own car on the horizon's row;
+// the outermost such column on the side is where the side view's reach ends. Cameras in the
+// mirrors looking down see the road ahead in both views, and the views stay as options.side
+// gives; fisheyes looking sideways see ahead only near their field's edge, where the two fields
+// barely overlap, and their side views then cover the road ahead-left and ahead-right by motion
+// stereo.
+SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& options, Side side);
 
 // The ground sectors the pipeline processes (for the map and for dps-eval's field of view): the
 // front pair from the cameras' midpoint, beginning where both cameras' views overlap; each side
