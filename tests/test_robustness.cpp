@@ -254,6 +254,15 @@ dps::DriveSummary SynthesizeAndProcess(const dps::RandomizedScene& r, const std:
   return dps::ProcessDrive(drive, (work / "out").string(), po);
 }
 
+// Seed `seed` of the shipped scene `family` at 640x480, drawn as dps-synth --randomize draws it
+// (with the scene's own randomize block).
+dps::RandomizedScene Draw640(const std::string& family, std::uint64_t seed) {
+  const std::string path = dps_test::kSource + "/data/scenes/" + family + ".yaml";
+  dps::Scene scene = dps::ReadScene(path);
+  dps::ResizeScene(&scene, 640, 480);
+  return dps::Randomize(scene, seed, dps::ReadRandomizeOptions(path));
+}
+
 // A fixed subset of the report set at 320x240, through dps-process's path and dps-eval's scoring.
 void TestSubset() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness");
@@ -286,10 +295,7 @@ void TestSubset() {
 // 20 m may have a top below min_obstacle_height_m.
 void TestRaisedPavement() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness_pavement");
-  const std::string path = dps_test::kSource + "/data/scenes/empty_road.yaml";
-  dps::Scene scene = dps::ReadScene(path);
-  dps::ResizeScene(&scene, 640, 480);
-  const dps::RandomizedScene r = dps::Randomize(scene, 6, dps::ReadRandomizeOptions(path));
+  const dps::RandomizedScene r = Draw640("empty_road", 6);
   CHECK(Draw(r, "render.kerb_height_m") > 0.1);
   const dps::DriveSummary s = SynthesizeAndProcess(r, work, "empty_road_6");
   const double min_height = dps::FrontDetectorOptions().min_obstacle_height_m;
@@ -318,10 +324,7 @@ void TestRaisedPavement() {
 // there with it, and at least twice as many as without, at no lower precision over the drive.
 void TestReachForward() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness_forward");
-  const std::string path = dps_test::kSource + "/data/scenes/truck_far.yaml";
-  dps::Scene scene = dps::ReadScene(path);
-  dps::ResizeScene(&scene, 640, 480);
-  const dps::RandomizedScene r = dps::Randomize(scene, 3, dps::ReadRandomizeOptions(path));
+  const dps::RandomizedScene r = Draw640("truck_far", 3);
   CHECK_EQ(r.camera_family, std::string("fisheye_side"));
   dps::PipelineOptions o = dps::DefaultPipelineOptions(r.processing_rig);
   o.side_forward_max_deg = dps::kSideForwardReachDeg;
