@@ -319,7 +319,9 @@ void TestRaisedPavement() {
 // pair barely sees the truck ahead on the left. With reach_forward (dps-process --reach-forward)
 // each side view reaches kSideForwardReachDeg in front of its axis, over what the front pair does
 // not see; on the shipped rig, mirror cameras looking down whose front views both see +-49.6
-// degrees, the side views stay as they are. Scored against the drive's truth in the front zone
+// degrees, the side views stay as they are. The reaching views' forward edge looks 76 degrees
+// ahead of their axes, and their sectors take in what lies 25 degrees off straight ahead.
+// Scored against the drive's truth in the front zone
 // (near point ahead of the car's front): the truck found in at least three quarters of its frames
 // there with it, and at least twice as many as without, at no lower precision over the drive.
 void TestReachForward() {
@@ -331,9 +333,27 @@ void TestReachForward() {
   const dps::Rig shipped = dps::ReadRig(dps_test::kSource + "/data/rigs/omni_pair.yaml");
   dps::PipelineOptions so = dps::DefaultPipelineOptions(shipped);
   so.side_forward_max_deg = dps::kSideForwardReachDeg;
+  const dps::PipelineOptions plain_options = dps::DefaultPipelineOptions(r.processing_rig);
+  const dps::Coverage reaching_coverage = dps::PipelineCoverage(r.processing_rig, o);
+  const dps::Coverage plain_coverage = dps::PipelineCoverage(r.processing_rig, plain_options);
   for (const dps::Side side : {dps::Side::kLeft, dps::Side::kRight}) {
-    CHECK_NEAR(dps::SideOptionsForRig(r.processing_rig, o, side).forward_half_angle_deg, dps::kSideForwardReachDeg, 1e-9);
+    const bool left = side == dps::Side::kLeft;
+    const dps::SideDetectorOptions reaching = dps::SideOptionsForRig(r.processing_rig, o, side);
+    CHECK_NEAR(reaching.forward_half_angle_deg, dps::kSideForwardReachDeg, 1e-9);
     CHECK_EQ(dps::SideOptionsForRig(shipped, so, side).forward_half_angle_deg, 0.0);
+    // The view's forward-most column looks 76 degrees ahead of its axis (image x runs forwards in a
+    // left view, backwards in a right one), within a column's angle.
+    const dps::ViewSpec view = dps::SideDetectorViewSpec(side, reaching);
+    const double x = left ? view.width - 1 : 0;
+    const Eigen::Vector3d ray = view.vehicle_from_view * Eigen::Vector3d((x - view.cx) / view.focal_px, 0, 1);
+    CHECK_NEAR(std::atan2(ray.z(), std::abs(ray.x())) / kDeg, dps::kSideForwardReachDeg, 1.0 / view.focal_px / kDeg);
+    // A point 10 m from the camera 25 degrees off straight ahead on its side (65 ahead of the side
+    // view's axis; the front pair's views both see less than 15 either side) is in the side's sector
+    // with the views reaching forward and not without.
+    const Eigen::Vector3d at = r.processing_rig.Camera(left ? "left" : "right").vehicle_from_camera.t;
+    const Eigen::Vector2d p(at.x() + (left ? -1 : 1) * 10 * std::sin(25 * kDeg), at.z() + 10 * std::cos(25 * kDeg));
+    CHECK(reaching_coverage.sectors[left ? 1 : 2].Contains(p));
+    CHECK(!plain_coverage.sectors[left ? 1 : 2].Contains(p));
   }
   const dps::DriveSummary plain = SynthesizeAndProcess(r, work, "truck_far_3");
   dps::DriveOptions po;
