@@ -320,10 +320,10 @@ void TestRaisedPavement() {
 // each side view reaches kSideForwardReachDeg in front of its axis, over what the front pair does
 // not see; on the shipped rig, mirror cameras looking down whose front views both see +-49.6
 // degrees, the side views stay as they are. The reaching views' forward edge looks 76 degrees
-// ahead of their axes, and their sectors take in what lies 25 degrees off straight ahead.
-// Scored against the drive's truth in the front zone
-// (near point ahead of the car's front): the truck found in at least three quarters of its frames
-// there with it, and at least twice as many as without, at no lower precision over the drive.
+// ahead of their axes, and their sectors take in what lies 25 degrees off straight ahead. Scored
+// against the drive's truth in the front zone (near point ahead of the car's front): the truck
+// found in at least three quarters of its frames there with it, and at least twice as many as
+// without, at no lower precision over the drive.
 void TestReachForward() {
   const std::filesystem::path work = dps_test::ScratchDir("dps_test_robustness_forward");
   const dps::RandomizedScene r = Draw640("truck_far", 3);
