@@ -76,8 +76,8 @@ FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front);
 
 // How far in front of their axes the side views may reach with PipelineOptions::side_forward_max_deg
 // (dps-process --reach-forward): tan 76 deg = 4 focal lengths, so a view at most 2.5 times as wide
-// as the default (its cost grows with its width); columns there sample the ground 1 / cos^2 = 17
-// times as finely as the view's axis, and the source image much more coarsely.
+// as the default (its cost grows with its width); a column there spans 1 / cos^2 = 17 times less
+// angle than one at the view's axis.
 constexpr double kSideForwardReachDeg = 76.0;
 
 // The side detector's options for one side of `rig`: the side view reaches forward
