@@ -112,28 +112,52 @@ FrontDetectorOptions NearFrontOptions(const FrontDetectorOptions& front) {
   return o;
 }
 
-SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& o, Side side) {
-  SideDetectorOptions s = o.side;
-  const double given_deg = s.forward_half_angle_deg > 0.0
-                               ? s.forward_half_angle_deg
-                               : std::atan((s.view_width - 1) / 2.0 / s.focal_px) / kRadPerDeg;
-  if (o.side_forward_max_deg <= given_deg) return s;
+namespace {
+// Where the front pair sees: its views' columns that both have a source that is not the own car on
+// the horizon's row, the outermost on the left and on the right (-1 when none), with their rays.
+struct FrontSight {
+  int width = 0;
+  int first = -1, last = -1;
+  Eigen::Vector3d first_ray{0, 0, 1}, last_ray{0, 0, 1};  // vehicle frame
+};
+
+FrontSight FrontPairSight(const Rig& rig, const PipelineOptions& o) {
   const ViewSpec spec = FrontViewSpec(rig, "left", "right", o.front.view_width, o.front.view_height, o.front.focal_px);
   const VirtualView left(rig.Camera("left"), spec), right(rig.Camera("right"), spec);
   const int y = static_cast<int>(std::lround(spec.cy));
   auto sees = [y](const VirtualView& v, int x) {
     return v.mask().at<std::uint8_t>(y, x) != 0 && (v.own_car().empty() || v.own_car().at<std::uint8_t>(y, x) == 0);
   };
+  FrontSight f;
+  f.width = spec.width;
+  for (int x = 0; x < spec.width; ++x) {
+    if (!sees(left, x) || !sees(right, x)) continue;
+    if (f.first < 0) f.first = x;
+    f.last = x;
+  }
+  if (f.first >= 0) {
+    f.first_ray = left.RayVehicle(f.first, y);
+    f.last_ray = left.RayVehicle(f.last, y);
+  }
+  return f;
+}
+
+// A ray's bearing on the ground, from +Z towards +X.
+double Bearing(const Eigen::Vector3d& ray) { return std::atan2(ray.x(), ray.z()); }
+}  // namespace
+
+SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& o, Side side) {
+  SideDetectorOptions s = o.side;
+  const double given_deg = s.forward_half_angle_deg > 0.0
+                               ? s.forward_half_angle_deg
+                               : std::atan((s.view_width - 1) / 2.0 / s.focal_px) / kRadPerDeg;
+  if (o.side_forward_max_deg <= given_deg) return s;
   // The bearing of the pair's outermost seen column on the side, from straight ahead towards the
   // side (negative: beyond straight ahead); none seen: the side view reaches as far as it may.
+  const FrontSight sight = FrontPairSight(rig, o);
   double edge_deg = -90.0;
-  for (int i = 0; i < spec.width; ++i) {
-    const int x = side == Side::kLeft ? i : spec.width - 1 - i;
-    if (sees(left, x) && sees(right, x)) {
-      const Eigen::Vector3d ray = left.RayVehicle(x, y);
-      edge_deg = std::atan2(side == Side::kLeft ? -ray.x() : ray.x(), ray.z()) / kRadPerDeg;
-      break;
-    }
+  if (sight.first >= 0) {
+    edge_deg = (side == Side::kLeft ? -Bearing(sight.first_ray) : Bearing(sight.last_ray)) / kRadPerDeg;
   }
   const double reach_deg = std::min(90.0 - edge_deg, o.side_forward_max_deg);
   if (reach_deg > given_deg) s.forward_half_angle_deg = reach_deg;
@@ -152,7 +176,29 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
   // apart and +-49.6 degrees), whatever their offset along the axis.
   const double axis = std::atan2(dir.x(), dir.z()), half = std::atan(o.front.view_width / 2.0 / o.front.focal_px);
   const Eigen::Vector2d lg(l.x(), l.z()), rg(r.x(), r.z()), across(std::cos(axis), -std::sin(axis));
-  c.sectors.push_back({"front", (lg + rg) / 2, axis, half, across.dot(rg - lg) / 2 / std::tan(half)});
+  const Eigen::Vector2d apex = (lg + rg) / 2;
+  const FrontSight sight = FrontPairSight(rig, o);
+  if (sight.first == 0 && sight.last == sight.width - 1) {
+    c.sectors.push_back({"front", apex, axis, half, across.dot(rg - lg) / 2 / std::tan(half)});
+  } else if (sight.first < 0) {
+    c.sectors.push_back({"front", apex, axis, 0.0, 0.0});  // the pair sees nothing
+  } else {
+    // Where the cameras' fields or the own car end the pair's sight within the views: between the
+    // bearings of its outermost seen columns, from where the right camera's ray along the first
+    // meets the left camera's along the last (the inner edges, as for the views' own edges).
+    const double lo = Bearing(sight.first_ray), hi = Bearing(sight.last_ray);
+    const double direction = (lo + hi) / 2;
+    const Eigen::Vector2d a(std::sin(lo), std::cos(lo)), b(std::sin(hi), std::cos(hi));
+    // rg + s a = lg + t b
+    const double det = a.x() * (-b.y()) - a.y() * (-b.x());
+    double start = 0.0;
+    if (std::abs(det) > 1e-9) {
+      const Eigen::Vector2d d = lg - rg;
+      const double s = (d.x() * (-b.y()) - d.y() * (-b.x())) / det;
+      start = std::max(0.0, (rg + s * a - apex).dot(Eigen::Vector2d(std::sin(direction), std::cos(direction))));
+    }
+    c.sectors.push_back({"front", apex, direction, (hi - lo) / 2, start});
+  }
   if (o.sides) {
     // Each side view's columns that motion stereo matches, at the views' full size (at speed the
     // views shrink and their matched columns span less: SideResult::sector is each frame's).

@@ -91,10 +91,13 @@ constexpr double kSideForwardReachDeg = 76.0;
 // stereo.
 SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& options, Side side);
 
-// The ground sectors the pipeline processes (for the map and for dps-eval's field of view): the
-// front pair from the cameras' midpoint, beginning where both cameras' views overlap; each side
-// view from its camera, over the columns motion stereo matches at the views' full size (a strip
-// at either edge is never matched: a match there could lie outside the previous view).
+// The ground sectors the pipeline processes (for the map, the occupancy grid's free space, the
+// remembered obstacles and regression tests' zones): the front pair from the cameras' midpoint,
+// beginning where both cameras' views overlap, over the views' width or, where the cameras' fields
+// or the own car end its sight within the views, over the columns both views see on the horizon's
+// row; each side view from its camera, over the columns motion stereo matches at the views' full
+// size (a strip at either edge is never matched: a match there could lie outside the previous
+// view).
 Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& options);
 
 // One frame's input: both omni images and, for motion stereo, the vehicle's motion since the
