@@ -366,6 +366,13 @@ void TestReachForward() {
   po.map_video = false;
   po.reach_forward = true;
   const dps::DriveSummary reaching = dps::ProcessDrive((work / "drives" / "truck_far_3").string(), (work / "forward").string(), po);
+  // summary.json's coverage: the pipeline's sectors, the side views' wider with the option.
+  CHECK_EQ(plain.coverage.sectors.size(), size_t(3));
+  CHECK_EQ(reaching.coverage.sectors.size(), size_t(3));
+  for (size_t k = 1; k < 3; ++k) {
+    CHECK(reaching.coverage.sectors[k].half_angle_rad > plain.coverage.sectors[k].half_angle_rad + 10 * kDeg);
+  }
+  CHECK(plain.ToJson().find("\"coverage\": [{\"name\": \"front\"") != std::string::npos);
   dps::EvaluationOptions eo;
   eo.visibility = std::make_shared<const dps::Visibility>(r.scene.rig);
   const std::vector<dps::TruthRow> truth = dps::ReadTruth((work / "drives" / "truck_far_3" / "truth.csv").string());

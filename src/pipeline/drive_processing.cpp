@@ -65,7 +65,14 @@ std::string DriveSummary::ToJson() const {
       << ", \"own_car_fraction\": " << m.own_car_fraction << "}";
     first_mask = false;
   }
-  o << "}";
+  o << "},\n  \"coverage\": [";
+  for (size_t k = 0; k < coverage.sectors.size(); ++k) {
+    const Sector& c = coverage.sectors[k];
+    o << (k ? ", " : "") << "{\"name\": " << JsonString(c.name) << ", \"apex_m\": [" << c.apex.x() << ", " << c.apex.y()
+      << "], \"direction_deg\": " << c.direction_rad / kRadPerDeg << ", \"half_angle_deg\": " << c.half_angle_rad / kRadPerDeg
+      << ", \"start_m\": " << c.start_m << "}";
+  }
+  o << "]";
   if (!extrinsics.empty()) {
     o << ",\n  \"extrinsic_correction\": {";
     bool first_camera = true;
@@ -636,6 +643,7 @@ void DriveRun::WriteFiles() {
     s_.grid_scale = grid_.EvidenceScale();
   }
   write_ += Seconds(t4, Clock::now());
+  s_.coverage = pipeline_.coverage();
   s_.frames = in_.frames;
   s_.detections = static_cast<int>(detections_.size());
   s_.stage_seconds = {{"decode", decode_}, {"front", front_}, {"sides", sides_}, {"map", map_s_}, {"write", write_}};
