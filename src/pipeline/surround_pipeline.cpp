@@ -144,24 +144,35 @@ FrontSight FrontPairSight(const Rig& rig, const PipelineOptions& o) {
 
 // A ray's bearing on the ground, from +Z towards +X.
 double Bearing(const Eigen::Vector3d& ray) { return std::atan2(ray.x(), ray.z()); }
-}  // namespace
 
-SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& o, Side side) {
+
+// How far in front of its axis a side view reaches with these options, degrees.
+double GivenForwardDeg(const SideDetectorOptions& s) {
+  return s.forward_half_angle_deg > 0.0 ? s.forward_half_angle_deg
+                                        : std::atan((s.view_width - 1) / 2.0 / s.focal_px) / kRadPerDeg;
+}
+
+// Whether the side views may reach further forward than options.side gives them.
+bool MayReachForward(const PipelineOptions& o) { return o.side_forward_max_deg > GivenForwardDeg(o.side); }
+
+// SideOptionsForRig with the front pair's sight.
+SideDetectorOptions SideOptionsForSight(const PipelineOptions& o, Side side, const FrontSight& sight) {
   SideDetectorOptions s = o.side;
-  const double given_deg = s.forward_half_angle_deg > 0.0
-                               ? s.forward_half_angle_deg
-                               : std::atan((s.view_width - 1) / 2.0 / s.focal_px) / kRadPerDeg;
-  if (o.side_forward_max_deg <= given_deg) return s;
+  if (!MayReachForward(o)) return s;
   // The bearing of the pair's outermost seen column on the side, from straight ahead towards the
   // side (negative: beyond straight ahead); none seen: the side view reaches as far as it may.
-  const FrontSight sight = FrontPairSight(rig, o);
   double edge_deg = -90.0;
   if (sight.first >= 0) {
     edge_deg = (side == Side::kLeft ? -Bearing(sight.first_ray) : Bearing(sight.last_ray)) / kRadPerDeg;
   }
   const double reach_deg = std::min(90.0 - edge_deg, o.side_forward_max_deg);
-  if (reach_deg > given_deg) s.forward_half_angle_deg = reach_deg;
+  if (reach_deg > GivenForwardDeg(s)) s.forward_half_angle_deg = reach_deg;
   return s;
+}
+}  // namespace
+
+SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& o, Side side) {
+  return MayReachForward(o) ? SideOptionsForSight(o, side, FrontPairSight(rig, o)) : o.side;
 }
 
 Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
@@ -203,7 +214,7 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
     // Each side view's columns that motion stereo matches, at the views' full size (at speed the
     // views shrink and their matched columns span less: SideResult::sector is each frame's).
     for (const auto& [name, side, at] : {std::make_tuple("left", Side::kLeft, l), std::make_tuple("right", Side::kRight, r)}) {
-      const SideDetectorOptions options = SideOptionsForRig(rig, o, side);
+      const SideDetectorOptions options = SideOptionsForSight(o, side, sight);
       const ViewSpec view = SideDetectorViewSpec(side, options);
       const auto [first, last] = SideMatchedColumns(side, view.width, options.stereo);
       c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last));
@@ -255,8 +266,9 @@ SurroundPipeline::SurroundPipeline(const Rig& rig, const PipelineOptions& option
   front_eye_ = Eigen::Vector2d(eye.x(), eye.z());
   front_eye_height_m_ = -eye.y();
   if (options.sides) {
-    left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, SideOptionsForRig(rig, options, Side::kLeft));
-    right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, SideOptionsForRig(rig, options, Side::kRight));
+    const FrontSight sight = MayReachForward(options) ? FrontPairSight(rig, options) : FrontSight{};
+    left_ = std::make_unique<SideDetector>(rig, "left", Side::kLeft, SideOptionsForSight(options, Side::kLeft, sight));
+    right_ = std::make_unique<SideDetector>(rig, "right", Side::kRight, SideOptionsForSight(options, Side::kRight, sight));
   }
   if (options.rears) {
     left_rear_ = std::make_unique<RearDetector>(rig, "left", Side::kLeft, options.rear);
