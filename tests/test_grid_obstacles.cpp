@@ -3,7 +3,8 @@
 // (their position in the current vehicle frame known from the ego motion), as detections of the
 // right side; nothing is remembered inside the view, nor a part of an object the frame measures;
 // a wall whose cells the grid lost in places is one object; remembered objects fade; a pole
-// measured with range noise is remembered at its surface, not over the depth its evidence spans.
+// measured with range noise is remembered at its surface, not over the depth its evidence spans;
+// beyond a side view's depth limit what the front pair measured is remembered.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -160,11 +161,58 @@ void TestNoisyRange() {
   CHECK(worst <= 0.3);  // the noise reaches 0.8 m, the evidence 0.6 m behind each hit
 }
 
+// A side view sees no deeper than its depth limit (Sector::max_depth_m): a pole 8 m out that the
+// front sector measured while ahead is remembered when it turns into the right view's bearings
+// beyond its 6 m, and not when the right sector is taken to see to any depth (as before it knew
+// its limit): there the view would have measured it.
+void TestBeyondDepthLimit() {
+  dps::Sector right{"right", {1.0, 0.0}, 90.0 * kDeg, 50.0 * kDeg};
+  dps::Sector limited = right;
+  limited.max_depth_m = 6.0;
+  limited.depth_direction_rad = 90.0 * kDeg;
+  // The sector's geometry: abeam 5 m out inside, 8 m out not; along 30 degrees off its axis it
+  // reaches 6 / cos(30 degrees).
+  CHECK(limited.Contains({6.0, 0.0}));
+  CHECK(!limited.Contains({9.0, 0.0}));
+  CHECK(!limited.Contains({1.0 + 6.5, 3.0}));
+  CHECK_NEAR(limited.Reach(60.0 * kDeg), 6.0 / std::cos(30.0 * kDeg), 1e-9);
+  CHECK(std::isinf(right.Reach(90.0 * kDeg)));
+  const dps::Sector front{"front", {0.0, 1.0}, 0.0, 50.0 * kDeg};
+  for (const bool knows_limit : {true, false}) {
+    double t = 0.0;
+    dps::OccupancyGrid grid;
+    dps::PlanarPose ego;
+    dps::Coverage coverage;
+    coverage.sectors = {front, knows_limit ? limited : right};
+    int beside = 0, remembered = 0;
+    for (int f = 0; f < 46; ++f) {
+      ego.z_m = 0.3 * f;  // 4.5 m/s; the pole at world (9, 20), 0.2 m across
+      const Eigen::Vector2d pole = dps::WorldToBody(ego, {9.0, 20.0});
+      std::vector<dps::Detection> frame;
+      if (front.Contains(pole)) frame.push_back(dps::DetectionFromPoints({pole}, "front"));
+      grid.Update(t += kFrame, ego, coverage, frame);
+      const std::vector<dps::Detection> r = dps::GridObstacles(grid, ego, coverage, frame, {});
+      if (!frame.empty()) continue;
+      ++beside;  // in the right view's bearings, 8 m out
+      if (r.size() == 1 && (Eigen::Vector2d(r[0].x_m, r[0].z_m) - pole).norm() < 0.5) ++remembered;
+    }
+    std::printf("pole 8 m out, %s: %d frames after the front, remembered in %d\n",
+                knows_limit ? "side view to 6 m" : "side view to any depth", beside, remembered);
+    CHECK(beside >= 5);
+    if (knows_limit) {
+      CHECK(remembered >= 3);
+    } else {
+      CHECK_EQ(remembered, 0);
+    }
+  }
+}
+
 }  // namespace
 
 int main() {
   TestRemembered();
   TestSameObject();
   TestNoisyRange();
+  TestBeyondDepthLimit();
   return dps_test::Report();
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "dps/util/math.h"
 
@@ -14,7 +15,14 @@ Eigen::Vector2d Sector::Vertex() const {
 bool Sector::Contains(const Eigen::Vector2d& p) const {
   const Eigen::Vector2d d = p - Vertex();
   // A point on an edge is inside (1e-9 rad: the rounding of points computed on an edge's ray).
-  return std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) <= half_angle_rad + 1e-9;
+  if (std::abs(std::remainder(std::atan2(d.x(), d.y()) - direction_rad, 2 * kPi)) > half_angle_rad + 1e-9) return false;
+  return max_depth_m <= 0.0 ||
+         (p - apex).dot(Eigen::Vector2d(std::sin(depth_direction_rad), std::cos(depth_direction_rad))) <= max_depth_m;
+}
+
+double Sector::Reach(double bearing_rad) const {
+  const double c = std::cos(bearing_rad - depth_direction_rad);
+  return max_depth_m > 0.0 && c > 0.0 ? max_depth_m / c : std::numeric_limits<double>::infinity();
 }
 
 bool Coverage::Contains(const Eigen::Vector2d& p) const {
@@ -26,7 +34,7 @@ bool Coverage::Contains(const Eigen::Vector2d& p) const {
 }
 
 Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
-                         double x_hi) {
+                         double x_hi, double max_depth_m) {
   const auto bearing = [&](double x) {
     const Eigen::Vector3d ray = view.vehicle_from_view * Eigen::Vector3d((x - view.cx) / view.focal_px, 0.0, 1.0);
     return Eigen::Vector2d(ray.x(), ray.z()).normalized();
@@ -37,6 +45,9 @@ Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, c
   s.apex = apex;
   s.direction_rad = std::atan2(mid.x(), mid.y());
   s.half_angle_rad = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) / 2;
+  s.max_depth_m = max_depth_m;
+  const Eigen::Vector3d axis = view.vehicle_from_view.col(2);
+  s.depth_direction_rad = std::atan2(axis.x(), axis.z());
   return s;
 }
 

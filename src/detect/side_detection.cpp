@@ -517,7 +517,7 @@ bool SideDetector::MatchPair(const cv::Mat& previous_omni, const cv::Mat& curren
   r->disparity = matcher_->Compute(prepared_, last_prepared_);
   if (side_ == Side::kLeft) cv::flip(r->disparity, r->disparity, 1);
   const auto [matched_first, matched_last] = SideMatchedColumns(side_, spec.width, options_.stereo);
-  r->sector = ViewColumnsSector(camera_.name, {t.x(), t.z()}, spec, matched_first, matched_last);
+  r->sector = ViewColumnsSector(camera_.name, {t.x(), t.z()}, spec, matched_first, matched_last, options_.max_depth_m);
   std::swap(last_prepared_, prepared_);
   last_view_ = current;
   last_key_ = current_key;

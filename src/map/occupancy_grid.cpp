@@ -73,6 +73,8 @@ FrameRays Rays(const PlanarPose& pose, const Coverage& coverage, const std::vect
       const Eigen::Vector2d dir = rotation * Eigen::Vector2d(std::sin(angle), std::cos(angle));
       const double r = nearest[b];
       const double sigma = std::isfinite(r) ? o.sigma0_m + o.sigma_per_m2 * r * r : 0.0;
+      // Without a hit, free up to free_range_m, beyond a side view's depth limit too (ending the fan
+      // there kept more phantoms and trails: docs/experiments/detection-history.md).
       const double free_end = std::isfinite(r) ? std::max(0.0, r - 2 * sigma) : o.free_range_m;
       fan.push_back(frame.Vertex(apex + std::min(free_end, o.free_range_m) * dir));
       if (std::isfinite(r)) rays.hits.push_back({apex, dir, r, sigma});

@@ -70,7 +70,11 @@ std::string DriveSummary::ToJson() const {
     const Sector& c = coverage.sectors[k];
     o << (k ? ", " : "") << "{\"name\": " << JsonString(c.name) << ", \"apex_m\": [" << c.apex.x() << ", " << c.apex.y()
       << "], \"direction_deg\": " << c.direction_rad / kRadPerDeg << ", \"half_angle_deg\": " << c.half_angle_rad / kRadPerDeg
-      << ", \"start_m\": " << c.start_m << "}";
+      << ", \"start_m\": " << c.start_m;
+    if (c.max_depth_m > 0) {
+      o << ", \"max_depth_m\": " << c.max_depth_m << ", \"depth_direction_deg\": " << c.depth_direction_rad / kRadPerDeg;
+    }
+    o << "}";
   }
   o << "]";
   if (!extrinsics.empty()) {

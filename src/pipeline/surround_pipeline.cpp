@@ -217,7 +217,7 @@ Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& o) {
       const SideDetectorOptions options = SideOptionsForSight(o, side, sight);
       const ViewSpec view = SideDetectorViewSpec(side, options);
       const auto [first, last] = SideMatchedColumns(side, view.width, options.stereo);
-      c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last));
+      c.sectors.push_back(ViewColumnsSector(name, {at.x(), at.z()}, view, first, last, options.max_depth_m));
     }
   }
   if (o.rears) {

@@ -1,8 +1,9 @@
 // dps — the field of view on the ground: what the pipeline processes, as sectors, each an apex
 // (the viewpoint, or the front pair's midpoint), a direction and a half-angle (for the front pair
 // atan of half the view width over the focal length, beginning ahead of its apex where both views
-// overlap; for a side view the span of the columns motion stereo matches). Scoring, the grid and
-// the map use it; without a coverage every direction counts.
+// overlap; for a side view the span of the columns motion stereo matches, as deep as its depth
+// limit). The grid, the remembered obstacles and the map use it; without a coverage every
+// direction counts.
 #pragma once
 
 #include <string>
@@ -22,8 +23,16 @@ struct Sector {
   // The sector begins this far ahead of the apex along its direction, at its vertex: a stereo
   // pair sees only where both views overlap, from where their inner edges cross.
   double start_m = 0.0;
+  // > 0: the source measures nothing deeper than this along depth_direction_rad from the apex (a
+  // side view's depth limit, SideDetectorOptions::max_depth_m): beyond it the sector does not see.
+  // 0: no such limit.
+  double max_depth_m = 0.0;
+  double depth_direction_rad = 0.0;
   Eigen::Vector2d Vertex() const;
   bool Contains(const Eigen::Vector2d& point) const;
+  // How far from the apex the sector sees along a bearing (from +Z towards +X): infinity without a
+  // depth limit, or where the bearing turns away from its depth direction by 90 degrees or more.
+  double Reach(double bearing_rad) const;
 };
 
 struct Coverage {
@@ -32,8 +41,8 @@ struct Coverage {
 };
 
 // The sector, from `apex` on the ground (vehicle frame), of a view's columns [x_lo, x_hi] (its
-// bearings at the principal row), named `name`.
+// bearings at the principal row), named `name`; max_depth_m > 0: no deeper along the view's axis.
 Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
-                         double x_hi);
+                         double x_hi, double max_depth_m = 0.0);
 
 }  // namespace dps
