@@ -1,5 +1,6 @@
 // The surround map picture (surround_map.h): the own car, obstacles, tracks, coverage and the
-// occupancy grid land where the vehicle-frame geometry puts them. Map pixel of vehicle (x, z):
+// occupancy grid land where the vehicle-frame geometry puts them; each frame's background shades
+// what that frame measured. Map pixel of vehicle (x, z):
 // u = size/2 + x * scale, v = size/2 - z * scale, scale = size / (2 range) px per metre.
 #include <algorithm>
 #include <cstdint>
@@ -174,8 +175,46 @@ void TestTracksAndGrid() {
 
 }  // namespace
 
+// The background is what the frame measured (MapBackgrounds): with both side views matched their
+// sectors are shaded as deep as their depth limit, in their own colours; a frame whose left view was
+// not matched (the car standing) leaves the left side white while the right keeps its colour; the
+// same coverage again gives the picture already drawn.
+void TestFrameBackgrounds() {
+  dps::Vehicle car;
+  car.width_m = 1.8;
+  car.length_m = 4.4;
+  dps::Coverage all = FrontOnly();
+  dps::Sector left{"left", {-1.0, 0.5}, -90.0 * M_PI / 180, 40.0 * M_PI / 180};
+  left.max_depth_m = 6.0;
+  left.depth_direction_rad = -90.0 * M_PI / 180;
+  dps::Sector right = left;
+  right.name = "right";
+  right.apex = {1.0, 0.5};
+  right.direction_rad = right.depth_direction_rad = 90.0 * M_PI / 180;
+  all.sectors.push_back(left);
+  all.sectors.push_back(right);
+  dps::Coverage no_left = FrontOnly();
+  no_left.sectors.push_back(right);
+  dps::MapBackgrounds backgrounds(car, kMap);
+  const cv::Mat both = backgrounds.For(all).clone();
+  const cv::Mat standing = backgrounds.For(no_left).clone();
+  // Abeam 4 m out: inside either view's depth; 9 m out: beyond it.
+  CHECK(!White(both.at<cv::Vec3b>(Pixel(-4.0, 0.5))));
+  CHECK(!White(both.at<cv::Vec3b>(Pixel(4.0, 0.5))));
+  CHECK(White(both.at<cv::Vec3b>(Pixel(-9.0, 0.5))));
+  CHECK(White(both.at<cv::Vec3b>(Pixel(9.0, 0.5))));
+  CHECK(both.at<cv::Vec3b>(Pixel(-4.0, 0.5)) != both.at<cv::Vec3b>(Pixel(4.0, 0.5)));  // each its colour
+  CHECK(White(standing.at<cv::Vec3b>(Pixel(-4.0, 0.5))));
+  CHECK(standing.at<cv::Vec3b>(Pixel(4.0, 0.5)) == both.at<cv::Vec3b>(Pixel(4.0, 0.5)));
+  // Drawn once per coverage.
+  const cv::Mat& again = backgrounds.For(all);
+  CHECK(again.data == backgrounds.For(all).data);
+  CHECK_EQ(cv::norm(again, both, cv::NORM_INF), 0.0);
+}
+
 int main() {
   TestBackgroundAndObstacles();
   TestTracksAndGrid();
+  TestFrameBackgrounds();
   return dps_test::Report();
 }

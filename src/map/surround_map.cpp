@@ -3,6 +3,7 @@
 #include "dps/util/error.h"
 #include "dps/util/math.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -37,6 +38,15 @@ constexpr double kShadeWeight = 0.7;
 
 cv::Scalar SectorShade(size_t k) { return kShades[k % 3] * kShadeWeight + cv::Scalar::all(255) * (1 - kShadeWeight); }
 
+// A source keeps its colour whichever sources a frame measured with: the front pair, the left and
+// the right camera; other names by their place.
+size_t ShadeOf(const std::string& name, size_t k) {
+  if (name == "front") return 0;
+  if (name == "left") return 1;
+  if (name == "right") return 2;
+  return k;
+}
+
 // The legend's box at the bottom right (room for three sources; empty on maps too small for it).
 constexpr int kLegendLine = 14, kLegendLines = 11;
 cv::Rect LegendRect(const cv::Size& map) {
@@ -53,9 +63,12 @@ void DrawLegend(cv::Mat& map, const Coverage& coverage) {
     std::string text;
   };
   std::vector<Entry> entries;
-  for (size_t k = 0; k < coverage.sectors.size(); ++k) {
+  std::vector<std::string> named;
+  for (size_t k = 0; k < coverage.sectors.size() && named.size() < 3; ++k) {
     const std::string& n = coverage.sectors[k].name;
-    if (k < 3) entries.push_back({SectorShade(k), n == "front" ? "front: stereo pair" : n + ": motion stereo"});
+    if (std::find(named.begin(), named.end(), n) != named.end()) continue;  // a camera's rear view
+    named.push_back(n);
+    entries.push_back({SectorShade(ShadeOf(n, k)), n == "front" ? "front: stereo pair" : n + ": motion stereo"});
   }
   entries.push_back({cv::Scalar::all(255), "not measured"});
   entries.push_back({kObstacleColour, "obstacle"});
@@ -105,7 +118,7 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
       poly.push_back(to_px(from.x() + r * std::sin(a), from.y() + r * std::cos(a)));
     }
     cv::Mat layer = map.clone();
-    cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{poly}, kShades[k++ % 3]);
+    cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{poly}, kShades[ShadeOf(s.name, k++) % 3]);
     cv::addWeighted(layer, kShadeWeight, map, 1 - kShadeWeight, 0, map);
   }
   // Range rings and their labels.
@@ -123,6 +136,30 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
   cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   DrawLegend(map, coverage);
   return map;
+}
+
+MapBackgrounds::MapBackgrounds(const Vehicle& vehicle, const MapOptions& options, size_t capacity)
+    : vehicle_(vehicle), options_(options), capacity_(std::max<size_t>(1, capacity)) {}
+
+const cv::Mat& MapBackgrounds::For(const Coverage& coverage) {
+  // Sectors alike to a tenth of a degree and a centimetre draw alike.
+  std::string key;
+  char part[160];
+  for (const Sector& s : coverage.sectors) {
+    std::snprintf(part, sizeof(part), "%s %ld %ld %ld %ld %ld %ld %ld;", s.name.c_str(), std::lround(s.apex.x() * 100),
+                  std::lround(s.apex.y() * 100), std::lround(s.direction_rad / kRadPerDeg * 10),
+                  std::lround(s.half_angle_rad / kRadPerDeg * 10), std::lround(s.start_m * 100),
+                  std::lround(s.max_depth_m * 100), std::lround(s.depth_direction_rad / kRadPerDeg * 10));
+    key += part;
+  }
+  const auto it = pictures_.find(key);
+  if (it != pictures_.end()) return it->second;
+  if (pictures_.size() >= capacity_) {
+    pictures_.erase(order_.front());
+    order_.pop_front();
+  }
+  order_.push_back(key);
+  return pictures_.emplace(key, DrawMapBackground(vehicle_, coverage, options_)).first->second;
 }
 
 namespace {

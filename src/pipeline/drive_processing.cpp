@@ -457,7 +457,7 @@ class DriveRun {
         tracker_(o.tracker),
         grid_(o.occupancy),
         pictures_(tmp, o, in, s),
-        map_background_(DrawMapBackground(in.rig.vehicle, pipeline_.coverage(), o.map)) {}
+        map_backgrounds_(in.rig.vehicle, o.map) {}
 
   void Run(const std::function<void(int, int)>& progress);
   void WriteFiles();
@@ -483,7 +483,7 @@ class DriveRun {
   PlanarPose ego_;  // the vehicle in the tracker's world (its pose at frame 0)
   OccupancyGrid grid_;
   PictureOutputs pictures_;
-  const cv::Mat map_background_;
+  MapBackgrounds map_backgrounds_;  // per frame: the sectors it measured
   cv::Mat map_;  // the frame's map picture, drawn into the same buffer every frame
   std::ostringstream grid_index_;  // grid/grid.csv's rows
   double decode_ = 0, front_ = 0, sides_ = 0, map_s_ = 0, write_ = 0;
@@ -521,7 +521,8 @@ void DriveRun::Finish(FrameOutput& out, int f) {
   }
   if (o_.grid_every > 0 && f % o_.grid_every == 0) WriteGrid(f);
   if (pictures_.WantsMap()) {
-    DrawFrameMap(map_background_, grid_, in_.rig.vehicle, out.detections, frame_tracks, o_.map, caption, map_);
+    DrawFrameMap(map_backgrounds_.For(out.coverage), grid_, in_.rig.vehicle, out.detections, frame_tracks, o_.map,
+                 caption, map_);
     DrawLanes(map_, out.lanes.boundaries, o_.map);
     if (out.lanes.has_ego) DrawEgoLane(map_, out.lanes.ego);
   }

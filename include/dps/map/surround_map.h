@@ -3,6 +3,8 @@
 // lightly shaded (Gandhi & Trivedi 2006, section V-C, Fig. 1 and 7).
 #pragma once
 
+#include <deque>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -26,9 +28,28 @@ struct MapOptions {
   void Check() const;
 };
 
-// What every frame's map shares: coverage shading, range rings, the own car, the scale bar and a
-// legend of the colours (bottom right; none on maps under about 400 px).
+// What a frame's map is drawn over: each sector of `coverage` shaded (the front pair, the left and the
+// right camera each in its own colour), range rings, the own car, the scale bar and a legend of the
+// colours (bottom right; none on maps under about 400 px).
 cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& options);
+
+// The backgrounds of the frames' coverages (DrawMapBackground): a frame's sectors are what it
+// measured, so they change when a side view is not matched (standing, driving slowly), shrinks at
+// speed or turns with the car. Each distinct coverage is drawn once and kept, the oldest dropped
+// beyond `capacity` pictures.
+class MapBackgrounds {
+ public:
+  MapBackgrounds(const Vehicle& vehicle, const MapOptions& options, size_t capacity = 16);
+  // The background for a frame's coverage; valid until the next call.
+  const cv::Mat& For(const Coverage& coverage);
+
+ private:
+  Vehicle vehicle_;
+  MapOptions options_;
+  size_t capacity_;
+  std::map<std::string, cv::Mat> pictures_;
+  std::deque<std::string> order_;
+};
 
 // The own car (black) on a map picture; DrawMapBackground draws it too, this redraws it over
 // layers drawn later (the occupancy grid).
