@@ -108,13 +108,11 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
   size_t k = 0;
   for (const Sector& s : coverage.sectors) {
     // As far as the sector sees: beyond the map, or a side view's depth limit (from its apex).
-    const Eigen::Vector2d v = s.Vertex();
+    const Eigen::Vector2d v = s.Vertex(), from = s.max_depth_m > 0 ? s.apex : v;
     std::vector<cv::Point> poly{to_px(v.x(), v.y())};
     for (int i = 0; i <= 24; ++i) {
       const double a = s.direction_rad - s.half_angle_rad + 2 * s.half_angle_rad * i / 24.0;
-      const double reach = s.Reach(a);
-      const Eigen::Vector2d from = reach < 2 * o.range_m ? s.apex : v;
-      const double r = std::min(reach, 2 * o.range_m);
+      const double r = std::min(s.Reach(a), 2 * o.range_m);
       poly.push_back(to_px(from.x() + r * std::sin(a), from.y() + r * std::cos(a)));
     }
     cv::Mat layer = map.clone();

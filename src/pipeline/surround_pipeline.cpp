@@ -145,7 +145,6 @@ FrontSight FrontPairSight(const Rig& rig, const PipelineOptions& o) {
 // A ray's bearing on the ground, from +Z towards +X.
 double Bearing(const Eigen::Vector3d& ray) { return std::atan2(ray.x(), ray.z()); }
 
-
 // How far in front of its axis a side view reaches with these options, degrees.
 double GivenForwardDeg(const SideDetectorOptions& s) {
   return s.forward_half_angle_deg > 0.0 ? s.forward_half_angle_deg

@@ -93,8 +93,9 @@ struct DriveSummary {
   std::string map_video;          // the map video's file name and codec ("map.mp4 (H.264)"); "" = none
   std::map<std::string, MaskSummary> masks;  // by camera; the masks used are written to masks/
   std::map<std::string, ExtrinsicCorrection> extrinsics;  // by camera, when estimated
-  // Where the pipeline looked (PipelineCoverage): the front pair's sector and each side view's
-  // columns at its full size, as the map shades them.
+  // Where the pipeline looks (PipelineCoverage): the front pair's sector and each side view's
+  // columns at its full size, as deep as its depth limit (each frame's map shades the sectors that
+  // frame measured).
   Coverage coverage;
   // The grid files' geometry when they are written (grid_every > 0): cell size, cells per side,
   // evidence per 16-bit step, the stride.

@@ -91,13 +91,14 @@ constexpr double kSideForwardReachDeg = 76.0;
 // stereo.
 SideDetectorOptions SideOptionsForRig(const Rig& rig, const PipelineOptions& options, Side side);
 
-// The ground sectors the pipeline processes (for the map, the occupancy grid's free space, the
-// remembered obstacles and regression tests' zones): the front pair from the cameras' midpoint,
+// The ground sectors the pipeline processes (summary.json's coverage, regression tests' zones; each
+// frame's own sectors, FrameOutput::coverage, go to the map, the occupancy grid and the remembered
+// obstacles): the front pair from the cameras' midpoint,
 // beginning where both cameras' views overlap, over the views' width or, where the cameras' fields
 // or the own car end its sight within the views, over the columns both views see on the horizon's
 // row; each side view from its camera, over the columns motion stereo matches at the views' full
 // size (a strip at either edge is never matched: a match there could lie outside the previous
-// view).
+// view), as deep as its depth limit.
 Coverage PipelineCoverage(const Rig& rig, const PipelineOptions& options);
 
 // One frame's input: both omni images and, for motion stereo, the vehicle's motion since the
@@ -138,7 +139,7 @@ class SurroundPipeline {
   FrameOutput Process(const FrameInput& input, const std::vector<std::function<void()>>& alongside = {});
 
   const Rig& rig() const { return rig_; }
-  // The sectors the pipeline can process (PipelineCoverage): the map's shading, dps-eval's zone.
+  // The sectors the pipeline can process (PipelineCoverage).
   const Coverage& coverage() const { return coverage_; }
 
  private:
