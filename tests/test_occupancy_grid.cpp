@@ -65,7 +65,7 @@ void TestWall() {
 void TestFadesWithTime() {
   dps::OccupancyOptions o;
   dps::PlanarPose ego;
-  const dps::Coverage nothing_seen{{dps::Sector{"front", {0, 0.9}, 0.0, 1e-3}}};  // a sliver beside the wall
+  const dps::Coverage nothing_seen{{dps::Sector{"front", {0, 0.9}, 0.0, 1e-3}}, {}};  // a sliver beside the wall
   for (const int fps : {15, 30}) {
     dps::OccupancyGrid grid(o);
     grid.Update(0.0, ego, FrontSector(), Wall(ego, 10.0));

@@ -124,6 +124,15 @@ void TestParkedBeside() {
     for (const Eigen::Vector2d& q : d.points) outside += !r.sector.Contains(q);
   }
   CHECK_EQ(outside, 0);
+  // The pair's motion (the map's blind wedges): from the right camera, straight ahead (the car
+  // drives straight), telling the depth of everything found beside it, not of the road 30 m behind.
+  const Eigen::Vector3d eye = p.rig.Camera("right").vehicle_from_camera.t;
+  CHECK_EQ(r.motion.name, std::string("right"));
+  CHECK_NEAR(r.motion.viewpoint.x(), eye.x(), 1e-9);
+  CHECK_NEAR(r.motion.viewpoint.y(), eye.z(), 1e-9);
+  CHECK_NEAR(r.motion.direction_rad, 0.0, 1e-6);
+  for (const dps::Detection& d : r.detections) CHECK(r.motion.TellsDepth({d.x_m, d.z_m}));
+  CHECK(!r.motion.TellsDepth({eye.x(), eye.z() - 30.0}));
   // At the paper's 320x240 the same car; the views are 112x56 at this speed, so the velocity is
   // coarser.
   const Pair small = Render(car, "right", 320, 240);

@@ -11,7 +11,9 @@
 #include <opencv2/core.hpp>
 
 #include "check.h"
+#include "dps/camera/rig_io.h"
 #include "dps/map/surround_map.h"
+#include "dps/util/error.h"
 
 namespace {
 
@@ -35,6 +37,8 @@ bool Red(const cv::Vec3b& p) { return p[2] > 180 && p[0] < 80 && p[1] < 80; }
 bool NearMark(const cv::Vec3b& p) { return p[2] > 90 && p[2] < 160 && p[0] < 40 && p[1] < 40; }
 bool Blue(const cv::Vec3b& p) { return p[0] > 150 && p[2] < 60; }
 bool White(const cv::Vec3b& p) { return p == cv::Vec3b(255, 255, 255); }
+bool Magenta(const cv::Vec3b& p) { return p == cv::Vec3b(220, 90, 220); }
+bool HatchGrey(const cv::Vec3b& p) { return p == cv::Vec3b(110, 110, 110); }
 
 dps::Coverage FrontOnly() {
   dps::Coverage c;
@@ -212,9 +216,101 @@ void TestFrameBackgrounds() {
   CHECK_EQ(cv::norm(again, both, cv::NORM_INF), 0.0);
 }
 
+// Where motion stereo tells depth (MotionSight): a viewpoint displaced by b between two frames
+// sees a static point's direction turn; depth is told where the turn is at least the matching
+// noise over the focal length. Checked against the turn computed from the two viewpoints directly,
+// over points 4-40 m from the viewpoint in every direction (those within 10 % of the limit left
+// out: the disc is the small-displacement form, off by up to b / r = 7.5 %).
+void TestMotionSight() {
+  const double f = 170.0, sigma = 1.0, b = 0.3;
+  for (const double heading_deg : {0.0, 20.0, -135.0}) {
+    const double h = heading_deg * M_PI / 180;
+    const dps::MotionSight m{"left", {-1.0, 0.9}, h, f * b / sigma};
+    const Eigen::Vector2d step(b * std::sin(h), b * std::cos(h));
+    int agree = 0, checked = 0;
+    for (int i = 0; i < 4000; ++i) {
+      // A deterministic spread: distances 4-40 m, every bearing.
+      const double r = 4.0 + 36.0 * ((i * 7919) % 4000) / 4000.0, a = 2 * M_PI * i / 4000.0;
+      const Eigen::Vector2d p = m.viewpoint + r * Eigen::Vector2d(std::sin(a), std::cos(a));
+      const Eigen::Vector2d now = p - m.viewpoint, before = p - (m.viewpoint - step);
+      const double turn = std::acos(std::clamp(now.normalized().dot(before.normalized()), -1.0, 1.0));
+      const double ratio = turn * f / sigma;
+      if (std::abs(ratio - 1.0) < 0.1) continue;
+      ++checked;
+      agree += m.TellsDepth(p) == (ratio > 1.0);
+    }
+    std::printf("motion sight, heading %.0f deg: %d of %d points agree with the direct turn\n", heading_deg, agree,
+                checked);
+    CHECK(checked > 3000);
+    CHECK_EQ(agree, checked);
+  }
+}
+
+// The map hatches where the frame's motion stereo tells no depth, outside the measured sectors: at
+// speed (D = 40 m) straight behind the car, not beside it nor in the front sector; a frame without
+// motion stereo hatches nothing.
+void TestMotionBlindWedges() {
+  dps::Vehicle car;
+  dps::Coverage moving = FrontOnly();
+  moving.motion.push_back({"left", {-1.0, 0.9}, 0.0, 40.0});
+  moving.motion.push_back({"right", {1.0, 0.9}, 0.0, 40.0});
+  CHECK(moving.MotionBlind({0.0, -20.0}));
+  CHECK(!moving.MotionBlind({-8.0, 0.0}));
+  CHECK(!FrontOnly().MotionBlind({0.0, -20.0}));
+  const cv::Mat map = dps::DrawMapBackground(car, moving, kMap);
+  CHECK(Count(map, Pixel(0.0, -20.0), 4, Magenta) > 0);
+  CHECK_EQ(Count(map, Pixel(-8.0, 0.0), 4, Magenta), 0);
+  CHECK_EQ(Count(map, Pixel(0.0, 12.0), 4, Magenta), 0);  // the front pair measures there
+  const cv::Mat still = dps::DrawMapBackground(car, FrontOnly(), kMap);
+  CHECK_EQ(Count(still, Pixel(0.0, -20.0), 4, Magenta), 0);
+}
+
+// The road no camera sees, for two omni cameras in the mirrors (1 m up, 1 m out, 0.9 m ahead of
+// the centre of a 4.8 x 1.8 m car) with the car's box 1 m high: 0.2 m ahead of the bumper the
+// segment from either camera enters the box's side 0.1 m inboard at 0.9 m up, so the bonnet hides
+// it; 2.5 m beside the right camera the right camera sees the road (68 degrees off its axis),
+// the left camera's segment crosses the car 0.98 m up; the footprint's centre is under the car.
+void TestRoadNoCameraSees() {
+  dps::Rig rig = dps::ReadRig(std::string(DPS_SOURCE_DIR) + "/data/rigs/omni_pair.yaml");
+  const auto unseen_at = [&](const cv::Mat& unseen, double x, double z) { return unseen.at<uchar>(Pixel(x, z)) == 255; };
+  const cv::Mat unseen = dps::RoadNoCameraSees(rig, 1.0, kMap);
+  CHECK_EQ(unseen.size(), cv::Size(kMap.size_px, kMap.size_px));
+  CHECK(unseen_at(unseen, 0.0, 2.6));
+  CHECK(unseen_at(unseen, 0.0, 0.0));
+  CHECK(!unseen_at(unseen, 3.5, 0.9));
+  CHECK(!unseen_at(unseen, -3.5, 0.9));
+  // Without the car's box the bumper's road is seen.
+  CHECK(!unseen_at(dps::RoadNoCameraSees(rig, 0.0, kMap), 0.0, 2.6));
+  // The right camera's own car covering its whole image: the road beside it is seen by no camera.
+  dps::Rig own = rig;
+  own.cameras[1].own_car = cv::Mat(480, 640, CV_8U, cv::Scalar(255));
+  CHECK(unseen_at(dps::RoadNoCameraSees(own, 1.0, kMap), 3.5, 0.9));
+  CHECK(!unseen_at(dps::RoadNoCameraSees(own, 1.0, kMap), -3.5, 0.9));
+  // ... and so with its valid pixels none (the mask).
+  dps::Rig blind = rig;
+  blind.cameras[1].mask = cv::Mat(480, 640, CV_8U, cv::Scalar(0));
+  CHECK(unseen_at(dps::RoadNoCameraSees(blind, 1.0, kMap), 3.5, 0.9));
+  // Drawn cross-hatched in grey, with the motion's hatching kept off it.
+  dps::Coverage moving = FrontOnly();
+  moving.motion.push_back({"right", {1.0, 0.9}, 0.0, 40.0});
+  const cv::Mat map = dps::DrawMapBackground(rig.vehicle, moving, kMap, unseen);
+  CHECK(Count(map, Pixel(0.0, 2.8), 4, HatchGrey) > 0);
+  CHECK_EQ(Count(map, Pixel(3.5, 0.9), 4, HatchGrey), 0);
+  bool threw = false;
+  try {
+    dps::DrawMapBackground(rig.vehicle, moving, kMap, cv::Mat(10, 10, CV_8U, cv::Scalar(0)));
+  } catch (const dps::Error&) {
+    threw = true;
+  }
+  CHECK(threw);
+}
+
 int main() {
   TestBackgroundAndObstacles();
   TestTracksAndGrid();
   TestFrameBackgrounds();
+  TestMotionSight();
+  TestMotionBlindWedges();
+  TestRoadNoCameraSees();
   return dps_test::Report();
 }

@@ -33,6 +33,20 @@ bool Coverage::Contains(const Eigen::Vector2d& p) const {
   return false;
 }
 
+bool MotionSight::TellsDepth(const Eigen::Vector2d& point) const {
+  // r <= D sin(a), i.e. r^2 <= D |m x p| with m the unit displacement.
+  const Eigen::Vector2d p = point - viewpoint, m(std::sin(direction_rad), std::cos(direction_rad));
+  return p.squaredNorm() <= diameter_m * std::abs(m.x() * p.y() - m.y() * p.x());
+}
+
+bool Coverage::MotionBlind(const Eigen::Vector2d& p) const {
+  if (motion.empty()) return false;
+  for (const MotionSight& m : motion) {
+    if (m.TellsDepth(p)) return false;
+  }
+  return true;
+}
+
 Sector ViewColumnsSector(const std::string& name, const Eigen::Vector2d& apex, const ViewSpec& view, double x_lo,
                          double x_hi, double max_depth_m) {
   const auto bearing = [&](double x) {

@@ -479,6 +479,8 @@ bool SideDetector::MatchPair(const cv::Mat& previous_omni, const cv::Mat& curren
     return false;
   }
   r->view_scale = sixteenths / 16.0;
+  r->motion = {camera_.name, {t.x(), t.z()}, std::atan2(m->direction.x(), m->direction.y()),
+               options_.focal_px * r->view_scale * r->baseline_m / options_.disparity_sigma_px};
   SideViewCache& views = Views(sixteenths);
   const VirtualView& previous_view = views.Get(sign * alpha);
   const std::pair<int, long> previous_key{sixteenths, views.Key(sign * alpha)};

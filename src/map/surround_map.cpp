@@ -1,5 +1,7 @@
 #include "dps/map/surround_map.h"
 
+#include "dps/camera/box.h"
+#include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
 #include "dps/util/math.h"
 
@@ -20,6 +22,10 @@ namespace {
 // The obstacles' colour, their nearest points', the tracks'.
 const cv::Scalar kObstacleColour(0, 0, 220), kNearestColour(0, 0, 120), kTrackColour(200, 80, 0);
 const cv::Scalar kLaneColour(0, 170, 230);
+// Hatching: where motion stereo tells no depth (the sweep's colour for the epipoles' wedges,
+// plane_sweep.h), the road no camera sees.
+const cv::Scalar kMotionBlindColour(220, 90, 220), kUnseenColour(110, 110, 110);
+constexpr int kHatchPx = 8;  // the hatching's line spacing
 
 // Vehicle-frame (x, z) to map pixels: the vehicle origin at the centre, +Z up.
 struct MapProjection {
@@ -47,20 +53,43 @@ size_t ShadeOf(const std::string& name, size_t k) {
   return k;
 }
 
+// Diagonal lines kHatchPx apart (and the crossing ones when `crossed`) in `colour` over the pixels
+// of `picture` where `where` is set; `origin`: the picture's place in the map, so that hatching
+// drawn in pieces lines up.
+void Hatch(cv::Mat picture, const cv::Mat& where, const cv::Scalar& colour, bool crossed, cv::Point origin = {}) {
+  const cv::Vec3b c(cv::saturate_cast<uchar>(colour[0]), cv::saturate_cast<uchar>(colour[1]),
+                    cv::saturate_cast<uchar>(colour[2]));
+  const auto mod = [](int a) { return (a % kHatchPx + kHatchPx) % kHatchPx; };
+  for (int v = 0; v < picture.rows; ++v) {
+    // Every kHatchPx-th column from the first one on a line.
+    const auto line = [&](int first) {
+      for (int u = first; u < picture.cols; u += kHatchPx) {
+        if (where.at<uchar>(v, u)) picture.at<cv::Vec3b>(v, u) = c;
+      }
+    };
+    // The lines where the map's u + v is a multiple of the spacing, and u - v when crossed.
+    const int y = v + origin.y;
+    line(mod(-origin.x - y));
+    if (crossed) line(mod(y - origin.x));
+  }
+}
+
 // The legend's box at the bottom right (room for three sources; empty on maps too small for it).
-constexpr int kLegendLine = 14, kLegendLines = 11;
+constexpr int kLegendLine = 14, kLegendLines = 13;
 cv::Rect LegendRect(const cv::Size& map) {
   const int width = 190, height = kLegendLine * kLegendLines + 8;
   const cv::Rect box(map.width - width - 6, map.height - height - 6, width, height);
   return box.x < map.width / 2 || box.y < map.height / 2 ? cv::Rect() : box;
 }
 
-// What the colours mean, in LegendRect: each source's ground, what no source measures, obstacles
-// and their nearest points, tracks, the grid, the own car.
-void DrawLegend(cv::Mat& map, const Coverage& coverage) {
+// What the colours mean, in LegendRect: each source's ground, what no source measures, where the
+// motion tells no depth and the road no camera sees (when drawn), obstacles and their nearest
+// points, tracks, the grid, the own car.
+void DrawLegend(cv::Mat& map, const Coverage& coverage, bool unseen) {
   struct Entry {
     cv::Scalar colour;
     std::string text;
+    int hatch = 0;  // 0: a filled swatch; 1: diagonal lines; 2: crossed
   };
   std::vector<Entry> entries;
   std::vector<std::string> named;
@@ -71,6 +100,8 @@ void DrawLegend(cv::Mat& map, const Coverage& coverage) {
     entries.push_back({SectorShade(ShadeOf(n, k)), n == "front" ? "front: stereo pair" : n + ": motion stereo"});
   }
   entries.push_back({cv::Scalar::all(255), "not measured"});
+  if (!coverage.motion.empty()) entries.push_back({kMotionBlindColour, "no depth from motion", 1});
+  if (unseen) entries.push_back({kUnseenColour, "no camera sees the road", 2});
   entries.push_back({kObstacleColour, "obstacle"});
   entries.push_back({kNearestColour, "its nearest point"});
   entries.push_back({kTrackColour, "track: id class lane"});
@@ -84,8 +115,13 @@ void DrawLegend(cv::Mat& map, const Coverage& coverage) {
   cv::rectangle(map, box, cv::Scalar::all(120), 1);
   for (size_t i = 0; i < entries.size(); ++i) {
     const cv::Point at(box.x + 6, box.y + 5 + kLegendLine * static_cast<int>(i));
-    cv::rectangle(map, cv::Rect(at, cv::Size(16, 10)), entries[i].colour, cv::FILLED);
-    cv::rectangle(map, cv::Rect(at, cv::Size(16, 10)), cv::Scalar::all(160), 1);
+    const cv::Rect swatch(at, cv::Size(16, 10));
+    if (entries[i].hatch == 0) {
+      cv::rectangle(map, swatch, entries[i].colour, cv::FILLED);
+    } else {
+      Hatch(map(swatch), cv::Mat(swatch.size(), CV_8U, cv::Scalar(255)), entries[i].colour, entries[i].hatch == 2, at);
+    }
+    cv::rectangle(map, swatch, cv::Scalar::all(160), 1);
     cv::putText(map, entries[i].text, at + cv::Point(22, 9), cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar::all(0), 1,
                 cv::LINE_AA);
   }
@@ -99,12 +135,61 @@ void DrawOwnCar(cv::Mat& map, const Vehicle& vehicle, const MapOptions& o) {
                 cv::Scalar(0, 0, 0), cv::FILLED);
 }
 
-cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& o) {
+cv::Mat RoadNoCameraSees(const Rig& rig, double own_car_height_m, const MapOptions& o) {
+  o.Check();
+  if (!(own_car_height_m >= 0)) throw Error(Str("map: own_car_height_m = ", own_car_height_m, " (must be >= 0)"));
+  const MapProjection to_px(o);
+  const Eigen::Vector3d lo(-rig.vehicle.width_m / 2, -own_car_height_m, -rig.vehicle.length_m / 2);
+  const Eigen::Vector3d hi(rig.vehicle.width_m / 2, 0.0, rig.vehicle.length_m / 2);
+  struct Camera {
+    const RigCamera* camera;
+    cv::Mat valid;
+    Pose camera_from_vehicle;
+    bool inside;  // the viewpoint lies inside the own car's box: its mask says what the car hides
+  };
+  std::vector<Camera> cameras;
+  for (const RigCamera& c : rig.cameras) {
+    const Eigen::Vector3d t = c.vehicle_from_camera.t;
+    cameras.push_back({&c, CameraValidMask(c), c.vehicle_from_camera.Inverse(),
+                       (t.array() >= lo.array()).all() && (t.array() <= hi.array()).all()});
+  }
+  cv::Mat unseen(o.size_px, o.size_px, CV_8U, cv::Scalar(0));
+  cv::parallel_for_(cv::Range(0, o.size_px), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      for (int u = 0; u < o.size_px; ++u) {
+        const Eigen::Vector3d p((u - to_px.centre.x) / to_px.scale, 0.0, (to_px.centre.y - v) / to_px.scale);
+        bool seen = false;
+        for (const Camera& c : cameras) {
+          const Eigen::Vector3d& t = c.camera->vehicle_from_camera.t;
+          Eigen::Vector2d px;
+          if ((!c.inside && RayMeetsBox(t, p - t, lo, hi, 0.0, 1.0)) ||
+              !c.camera->model.Project(c.camera_from_vehicle.Apply(p), &px)) {
+            continue;
+          }
+          const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
+          if (x < 0 || y < 0 || x >= c.valid.cols || y >= c.valid.rows || !c.valid.at<uchar>(y, x)) continue;
+          if (!c.camera->own_car.empty() && c.camera->own_car.at<uchar>(y, x)) continue;
+          seen = true;
+          break;
+        }
+        if (!seen) unseen.at<uchar>(v, u) = 255;
+      }
+    }
+  });
+  return unseen;
+}
+
+cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& o, const cv::Mat& unseen) {
   const MapProjection to_px(o);
   const double scale = to_px.scale;
   cv::Mat map(o.size_px, o.size_px, CV_8UC3, cv::Scalar(255, 255, 255));
+  if (!unseen.empty() && (unseen.size() != map.size() || unseen.type() != CV_8U)) {
+    throw Error(Str("map: the unseen road is ", unseen.cols, "x", unseen.rows, ", not the map's ", o.size_px, "x",
+                    o.size_px, " CV_8U"));
+  }
 
   // Coverage: each sector lightly shaded.
+  std::vector<std::vector<cv::Point>> polygons;
   size_t k = 0;
   for (const Sector& s : coverage.sectors) {
     // As far as the sector sees: beyond the map, or a side view's depth limit (from its apex).
@@ -115,10 +200,37 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
       const double r = std::min(s.Reach(a), 2 * o.range_m);
       poly.push_back(to_px(from.x() + r * std::sin(a), from.y() + r * std::cos(a)));
     }
-    cv::Mat layer = map.clone();
-    cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{poly}, kShades[ShadeOf(s.name, k++) % 3]);
-    cv::addWeighted(layer, kShadeWeight, map, 1 - kShadeWeight, 0, map);
+    // Blended over the polygon's bounding box only.
+    const cv::Rect box = cv::boundingRect(poly) & cv::Rect(0, 0, map.cols, map.rows);
+    if (!box.empty()) {
+      cv::Mat layer = map(box).clone();
+      std::vector<cv::Point> shifted = poly;
+      for (cv::Point& q : shifted) q -= box.tl();
+      cv::fillPoly(layer, std::vector<std::vector<cv::Point>>{shifted}, kShades[ShadeOf(s.name, k) % 3]);
+      cv::addWeighted(layer, kShadeWeight, map(box), 1 - kShadeWeight, 0, map(box));
+    }
+    ++k;
+    polygons.push_back(std::move(poly));
   }
+  // Where this frame's motion stereo tells no depth (outside every sight's two discs), outside what
+  // a sector measured and where a camera sees the road; the road no camera sees.
+  if (!coverage.motion.empty()) {
+    cv::Mat blind(map.size(), CV_8U, cv::Scalar(255));
+    for (const MotionSight& m : coverage.motion) {
+      const Eigen::Vector2d across(std::cos(m.direction_rad), -std::sin(m.direction_rad));
+      for (const double side : {-1.0, 1.0}) {
+        const Eigen::Vector2d c = m.viewpoint + side * m.diameter_m / 2 * across;
+        // A quarter-pixel grid (shift 2) for the discs' centres and radii.
+        const cv::Point2d at(4 * (to_px.centre.x + c.x() * scale), 4 * (to_px.centre.y - c.y() * scale));
+        const double radius = std::min(4 * m.diameter_m / 2 * scale, 4e8);
+        cv::circle(blind, cv::Point(cvRound(at.x), cvRound(at.y)), cvRound(radius), cv::Scalar(0), cv::FILLED, cv::LINE_8, 2);
+      }
+    }
+    if (!polygons.empty()) cv::fillPoly(blind, polygons, cv::Scalar(0));
+    if (!unseen.empty()) blind.setTo(0, unseen);
+    Hatch(map, blind, kMotionBlindColour, false);
+  }
+  if (!unseen.empty()) Hatch(map, unseen, kUnseenColour, true);
   // Range rings and their labels.
   for (double r = o.ring_step_m; r <= o.range_m * 1.42; r += o.ring_step_m) {
     cv::circle(map, to_px(0, 0), cvRound(r * scale), cv::Scalar(200, 200, 200), 1, cv::LINE_AA);
@@ -132,12 +244,12 @@ cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, cons
   const cv::Point bar(12, o.size_px - 14);
   cv::line(map, bar, bar + cv::Point(cvRound(5 * scale), 0), cv::Scalar(0, 0, 0), 2);
   cv::putText(map, "5 m", bar + cv::Point(0, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  DrawLegend(map, coverage);
+  DrawLegend(map, coverage, !unseen.empty());
   return map;
 }
 
-MapBackgrounds::MapBackgrounds(const Vehicle& vehicle, const MapOptions& options, size_t capacity)
-    : vehicle_(vehicle), options_(options), capacity_(std::max<size_t>(1, capacity)) {}
+MapBackgrounds::MapBackgrounds(const Vehicle& vehicle, const MapOptions& options, size_t capacity, const cv::Mat& unseen)
+    : vehicle_(vehicle), options_(options), capacity_(std::max<size_t>(1, capacity)), unseen_(unseen) {}
 
 const cv::Mat& MapBackgrounds::For(const Coverage& coverage) {
   // Sectors alike to a tenth of a degree and a centimetre draw alike.
@@ -150,6 +262,12 @@ const cv::Mat& MapBackgrounds::For(const Coverage& coverage) {
                   std::lround(s.max_depth_m * 100), std::lround(s.depth_direction_rad / kRadPerDeg * 10));
     key += part;
   }
+  for (const MotionSight& m : coverage.motion) {
+    std::snprintf(part, sizeof(part), "m %s %ld %ld %ld %ld;", m.name.c_str(), std::lround(m.viewpoint.x() * 100),
+                  std::lround(m.viewpoint.y() * 100), std::lround(m.direction_rad / kRadPerDeg),
+                  m.diameter_m > 0 ? std::lround(std::log(m.diameter_m) / std::log(1.05)) : -1000L);
+    key += part;
+  }
   const auto it = pictures_.find(key);
   if (it != pictures_.end()) return it->second;
   if (pictures_.size() >= capacity_) {
@@ -157,7 +275,7 @@ const cv::Mat& MapBackgrounds::For(const Coverage& coverage) {
     order_.pop_front();
   }
   order_.push_back(key);
-  return pictures_.emplace(key, DrawMapBackground(vehicle_, coverage, options_)).first->second;
+  return pictures_.emplace(key, DrawMapBackground(vehicle_, coverage, options_, unseen_)).first->second;
 }
 
 namespace {

@@ -457,7 +457,9 @@ class DriveRun {
         tracker_(o.tracker),
         grid_(o.occupancy),
         pictures_(tmp, o, in, s),
-        map_backgrounds_(in.rig.vehicle, o.map) {}
+        map_backgrounds_(in.rig.vehicle, o.map, 16,
+                         pictures_.WantsMap() ? RoadNoCameraSees(in.rig, pipeline_options_.lane.own_car_height_m, o.map)
+                                              : cv::Mat()) {}
 
   void Run(const std::function<void(int, int)>& progress);
   void WriteFiles();
@@ -483,7 +485,7 @@ class DriveRun {
   PlanarPose ego_;  // the vehicle in the tracker's world (its pose at frame 0)
   OccupancyGrid grid_;
   PictureOutputs pictures_;
-  MapBackgrounds map_backgrounds_;  // per frame: the sectors it measured
+  MapBackgrounds map_backgrounds_;  // per frame: the sectors it measured, its motion's blind wedges
   cv::Mat map_;  // the frame's map picture, drawn into the same buffer every frame
   std::ostringstream grid_index_;  // grid/grid.csv's rows
   double decode_ = 0, front_ = 0, sides_ = 0, map_s_ = 0, write_ = 0;

@@ -367,6 +367,7 @@ void SurroundPipeline::Collect(const FrameInput& in, bool sides, const cv::Mat g
   for (const SideResult* s : {&out->left, &out->right}) {
     if (!sides || s->skipped) continue;
     out->coverage.sectors.push_back(s->sector);
+    if (!s->motion.name.empty()) out->coverage.motion.push_back(s->motion);
     for (const Detection& d : s->detections) out->detections.push_back(d);
   }
   for (const RearResult* s : {&out->left_rear, &out->right_rear}) {

@@ -155,6 +155,9 @@ struct SideResult {
   // (a strip at either edge, where a match could fall outside the previous view) are not seen.
   // Empty name when skipped.
   Sector sector;
+  // Where this pair's motion tells depth (MotionSight: the views' focal length, the baseline, the
+  // matching noise disparity_sigma_px). Empty name when skipped.
+  MotionSight motion;
   std::vector<Detection> detections;   // source = the camera's name
 };
 
@@ -218,8 +221,8 @@ class SideDetector {
     Eigen::Vector2d direction{0, 0};
   };
   // Renders both views parallel to the camera's displacement and matches them (the previous view
-  // is the last call's current one when `continuing`); fills r's baseline, views, disparity and
-  // sector. False (r skipped) when the camera moved too little (min_baseline_m).
+  // is the last call's current one when `continuing`); fills r's baseline, views, disparity,
+  // sector and motion. False (r skipped) when the camera moved too little (min_baseline_m).
   bool MatchPair(const cv::Mat& previous_omni, const cv::Mat& current_omni, const PlanarPose& current_in_previous,
                  bool continuing, SideResult* r, Matched* m);
   // The view scale for a baseline, in sixteenths.

@@ -28,18 +28,32 @@ struct MapOptions {
   void Check() const;
 };
 
+// The road that no camera of `rig` sees, over the map (CV_8U of the map's size, 255 = no camera
+// sees it): a camera sees a road point when it projects into the camera's valid pixels
+// (CameraValidMask), not onto its own car (RigCamera::own_car), and the segment from the viewpoint
+// to it passes through no box of the rig's vehicle footprint up to own_car_height_m (for a camera
+// outside that box). That is the own car's shadow on the road around it, and what lies beyond
+// the cameras' fields. own_car_height_m >= 0.
+cv::Mat RoadNoCameraSees(const Rig& rig, double own_car_height_m, const MapOptions& options);
+
 // What a frame's map is drawn over: each sector of `coverage` shaded (the front pair, the left and the
-// right camera each in its own colour), range rings, the own car, the scale bar and a legend of the
-// colours (bottom right; none on maps under about 400 px).
-cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& options);
+// right camera each in its own colour), `unseen` (RoadNoCameraSees; empty = none) cross-hatched in
+// grey, hatched in magenta outside both where the frame's motion stereo tells no depth
+// (Coverage::MotionBlind: the wedges about the motion's epipoles), range rings, the own car, the scale bar
+// and a legend of the colours (bottom right; none on maps under about 400 px).
+cv::Mat DrawMapBackground(const Vehicle& vehicle, const Coverage& coverage, const MapOptions& options,
+                          const cv::Mat& unseen = cv::Mat());
 
 // The backgrounds of the frames' coverages (DrawMapBackground): a frame's sectors are what it
 // measured, so they change when a side view is not matched (standing, driving slowly), shrinks at
-// speed or turns with the car. Each distinct coverage is drawn once and kept, the oldest dropped
-// beyond `capacity` pictures.
+// speed or turns with the car, and its motion's blind wedges with the speed. Each distinct
+// coverage (sectors to a tenth of a degree and a centimetre, the motion's directions to a degree
+// and its discs' diameters to 5 %) is drawn once and kept, the oldest dropped beyond `capacity`
+// pictures. `unseen`: as DrawMapBackground's, the same for every frame.
 class MapBackgrounds {
  public:
-  MapBackgrounds(const Vehicle& vehicle, const MapOptions& options, size_t capacity = 16);
+  MapBackgrounds(const Vehicle& vehicle, const MapOptions& options, size_t capacity = 16,
+                 const cv::Mat& unseen = cv::Mat());
   // The background for a frame's coverage; valid until the next call.
   const cv::Mat& For(const Coverage& coverage);
 
@@ -47,6 +61,7 @@ class MapBackgrounds {
   Vehicle vehicle_;
   MapOptions options_;
   size_t capacity_;
+  cv::Mat unseen_;
   std::map<std::string, cv::Mat> pictures_;
   std::deque<std::string> order_;
 };
