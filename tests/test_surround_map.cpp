@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -62,7 +64,7 @@ void TestBackgroundAndObstacles() {
   // The legend at the bottom right: a swatch of the front sector's shade as the map shows it, and
   // of the grid's free colour (the map behind the car there is otherwise white).
   const cv::Vec3b shade = background.at<cv::Vec3b>(Pixel(0.0, 12.0));
-  const cv::Mat corner = background(cv::Rect(kMap.size_px - 220, kMap.size_px - 220, 220, 220));
+  const cv::Mat corner = background(cv::Rect(kMap.size_px - 250, kMap.size_px - 250, 250, 250));
   int shaded = 0, free_colour = 0;
   for (int v = 0; v < corner.rows; ++v) {
     for (int u = 0; u < corner.cols; ++u) {
@@ -78,7 +80,8 @@ void TestBackgroundAndObstacles() {
   // An obstacle 10 m ahead, 4 m to the right: a 2 m wide row of ground points.
   std::vector<Eigen::Vector2d> points;
   for (double x = 3.0; x <= 5.0 + 1e-9; x += 0.25) points.emplace_back(x, 10.0);
-  const dps::Detection d = dps::DetectionFromPoints(points, "front");
+  dps::Detection d = dps::DetectionFromPoints(points, "front");
+  d.lane = 0;  // in the ego lane: red
   const cv::Mat map = dps::DrawSurroundMap(background, {d}, kMap, "test");
   const int at_obstacle = Count(map, Pixel(4.0, 10.0), 5, Red);
   const int elsewhere = Count(map, Pixel(-4.0, 10.0), 10, Red) + Count(map, Pixel(4.0, 14.0), 10, Red);
@@ -91,6 +94,18 @@ void TestBackgroundAndObstacles() {
   CHECK(Count(map, Pixel(3.0, 10.0), 1, NearMark) > 0);
   CHECK_EQ(Count(map, Pixel(4.0, 10.0), 1, NearMark), 0);
   CHECK_EQ(Count(map, Pixel(6.5, 10.0), 3, Red), 0);
+  // Coloured by lane: orange in a lane to the left, purple to the right, grey-brown unknown; each
+  // drawn where the ego lane's would be, and no red.
+  const auto Orange = [](const cv::Vec3b& p) { return p == cv::Vec3b(0, 150, 255); };
+  const auto Purple = [](const cv::Vec3b& p) { return p == cv::Vec3b(160, 30, 140); };
+  const auto Unknown = [](const cv::Vec3b& p) { return p == cv::Vec3b(90, 110, 130); };
+  const std::pair<std::optional<int>, bool (*)(const cv::Vec3b&)> lanes[] = {{-1, Orange}, {2, Purple}, {std::nullopt, Unknown}};
+  for (const auto& [lane, is] : lanes) {
+    d.lane = lane;
+    const cv::Mat coloured = dps::DrawSurroundMap(background, {d}, kMap, "test");
+    CHECK(Count(coloured, Pixel(4.0, 10.0), 5, is) > 40);
+    CHECK_EQ(Count(coloured, Pixel(4.0, 10.0), 5, Red), 0);
+  }
 }
 
 void TestTracksAndGrid() {

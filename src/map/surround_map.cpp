@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,8 +20,15 @@ namespace dps {
 
 namespace {
 
-// The obstacles' colour, their nearest points', the tracks'.
-const cv::Scalar kObstacleColour(0, 0, 220), kNearestColour(0, 0, 120), kTrackColour(200, 80, 0);
+// The obstacles' colours by their lane (the ego lane's, the lanes to the left, to the right,
+// unknown), their nearest points', the tracks'.
+const cv::Scalar kEgoLaneColour(0, 0, 220), kLeftLanesColour(0, 150, 255), kRightLanesColour(160, 30, 140),
+    kUnknownLaneColour(90, 110, 130), kNearestColour(0, 0, 120), kTrackColour(200, 80, 0);
+
+cv::Scalar LaneColour(const std::optional<int>& lane) {
+  if (!lane) return kUnknownLaneColour;
+  return *lane == 0 ? kEgoLaneColour : *lane < 0 ? kLeftLanesColour : kRightLanesColour;
+}
 const cv::Scalar kLaneColour(0, 170, 230);
 // Hatching: where motion stereo tells no depth (the sweep's colour for the epipoles' wedges,
 // plane_sweep.h), the road no camera sees.
@@ -75,7 +83,7 @@ void Hatch(cv::Mat picture, const cv::Mat& where, const cv::Scalar& colour, bool
 }
 
 // The legend's box at the bottom right (room for three sources; empty on maps too small for it).
-constexpr int kLegendLine = 14, kLegendLines = 13;
+constexpr int kLegendLine = 14, kLegendLines = 16;
 cv::Rect LegendRect(const cv::Size& map) {
   const int width = 190, height = kLegendLine * kLegendLines + 8;
   const cv::Rect box(map.width - width - 6, map.height - height - 6, width, height);
@@ -83,8 +91,8 @@ cv::Rect LegendRect(const cv::Size& map) {
 }
 
 // What the colours mean, in LegendRect: each source's ground, what no source measures, where the
-// motion tells no depth and the road no camera sees (when drawn), obstacles and their nearest
-// points, tracks, the grid, the own car.
+// motion tells no depth and the road no camera sees (when drawn), obstacles by lane and their
+// nearest points, tracks, the grid, the own car.
 void DrawLegend(cv::Mat& map, const Coverage& coverage, bool unseen) {
   struct Entry {
     cv::Scalar colour;
@@ -102,7 +110,10 @@ void DrawLegend(cv::Mat& map, const Coverage& coverage, bool unseen) {
   entries.push_back({cv::Scalar::all(255), "not measured"});
   if (!coverage.motion.empty()) entries.push_back({kMotionBlindColour, "no depth from motion", 1});
   if (unseen) entries.push_back({kUnseenColour, "no camera sees the road", 2});
-  entries.push_back({kObstacleColour, "obstacle"});
+  entries.push_back({kEgoLaneColour, "obstacle in the ego lane"});
+  entries.push_back({kLeftLanesColour, "... in a lane to the left"});
+  entries.push_back({kRightLanesColour, "... in a lane to the right"});
+  entries.push_back({kUnknownLaneColour, "... lane unknown"});
   entries.push_back({kNearestColour, "its nearest point"});
   entries.push_back({kTrackColour, "track: id class lane"});
   entries.push_back({kLaneColour, "lane boundary, ego LP"});
@@ -304,7 +315,7 @@ void DrawObstacles(cv::Mat& map, const std::vector<Detection>& detections, const
     cv::polylines(mask, pts, false, cv::Scalar(255), std::max(2, cvRound(0.25 * scale)));
     for (const cv::Point& p : pts) cv::circle(mask, p, std::max(1, cvRound(0.15 * scale)), cv::Scalar(255), cv::FILLED);
     cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, kernel);
-    map(box).setTo(kObstacleColour, mask);
+    map(box).setTo(LaneColour(d.lane), mask);
   }
   for (const Detection& d : detections) cv::circle(map, to_px(d.x_m, d.z_m), 3, kNearestColour, cv::FILLED, cv::LINE_AA);
   cv::putText(map, caption, cv::Point(10, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);

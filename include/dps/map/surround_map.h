@@ -1,5 +1,5 @@
 // dps — the surround map picture: a top-down view of the vehicle frame with the own car (black),
-// the detected obstacles (red), range rings and a scale, and the ground each source covers
+// the detected obstacles (coloured by lane), range rings and a scale, and the ground each source covers
 // lightly shaded (Gandhi & Trivedi 2006, section V-C, Fig. 1 and 7).
 #pragma once
 
@@ -72,7 +72,9 @@ void DrawOwnCar(cv::Mat& map, const Vehicle& vehicle, const MapOptions& options)
 
 // The map for one frame over a background from DrawMapBackground (same options). Obstacles are
 // drawn as their ground points joined in order and thickened by a closing in the picture (the
-// paper's morphological smoothing, erring towards the car).
+// paper's morphological smoothing, erring towards the car), coloured by their lane
+// (Detection::lane): red in the ego lane, orange in a lane to the left, purple to the right,
+// grey-brown when unknown.
 cv::Mat DrawSurroundMap(const cv::Mat& background, const std::vector<Detection>& detections,
                         const MapOptions& options, const std::string& caption);
 
