@@ -36,6 +36,18 @@ cv::Mat CameraValidMask(const RigCamera& camera) {
   return mask;
 }
 
+bool SeesRoadPoint(const RigCamera& camera, const Pose& camera_from_vehicle, const cv::Mat& valid,
+                   const Eigen::Vector3d& box_lo, const Eigen::Vector3d& box_hi, bool own_car_blocks,
+                   const Eigen::Vector3d& ground, Eigen::Vector2d* pixel) {
+  const Eigen::Vector3d& t = camera.vehicle_from_camera.t;
+  if ((own_car_blocks && RayMeetsBox(t, ground - t, box_lo, box_hi, 0.0, 1.0)) ||
+      !camera.model.Project(camera_from_vehicle.Apply(ground), pixel) || !camera.model.InImage(*pixel)) {
+    return false;
+  }
+  const int u = static_cast<int>(std::lround(pixel->x())), v = static_cast<int>(std::lround(pixel->y()));
+  return u >= 0 && v >= 0 && u < valid.cols && v < valid.rows && valid.at<std::uint8_t>(v, u);
+}
+
 cv::Mat ReadCameraMask(const std::string& path, const CameraModel& model) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) throw Error(Str(path, ": cannot read the mask image (no such file)"));

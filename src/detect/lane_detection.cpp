@@ -8,7 +8,6 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "dps/camera/box.h"
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
 #include "dps/util/math.h"
@@ -134,12 +133,7 @@ LaneDetector::LaneDetector(const Rig& rig, const LaneDetectorOptions& options) :
         const Eigen::Vector3d p(-o.lateral_m + (c + 0.5) * o.cell_m, 0.0, o.ahead_m - (r + 0.5) * o.cell_m);
         Eigen::Vector2d px;
         map_[i].at<cv::Vec2f>(r, c) = cv::Vec2f(-1, -1);
-        if (RayMeetsBox(cam.vehicle_from_camera.t, p - cam.vehicle_from_camera.t, lo, hi, 0.0, 1.0) || !cam.model.Project(camera_from_vehicle.Apply(p), &px) ||
-            !cam.model.InImage(px)) {
-          continue;
-        }
-        const int u = static_cast<int>(std::lround(px.x())), v = static_cast<int>(std::lround(px.y()));
-        if (u < 0 || v < 0 || u >= valid.cols || v >= valid.rows || !valid.at<std::uint8_t>(v, u)) continue;
+        if (!SeesRoadPoint(cam, camera_from_vehicle, valid, lo, hi, true, p, &px)) continue;
         map_[i].at<cv::Vec2f>(r, c) = cv::Vec2f(static_cast<float>(px.x()), static_cast<float>(px.y()));
         seen[i].at<std::uint8_t>(r, c) = 255;
       }

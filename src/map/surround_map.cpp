@@ -1,6 +1,5 @@
 #include "dps/map/surround_map.h"
 
-#include "dps/camera/box.h"
 #include "dps/camera/valid_mask.h"
 #include "dps/util/error.h"
 #include "dps/util/math.h"
@@ -171,15 +170,12 @@ cv::Mat RoadNoCameraSees(const Rig& rig, double own_car_height_m, const MapOptio
         const Eigen::Vector3d p((u - to_px.centre.x) / to_px.scale, 0.0, (to_px.centre.y - v) / to_px.scale);
         bool seen = false;
         for (const Camera& c : cameras) {
-          const Eigen::Vector3d& t = c.camera->vehicle_from_camera.t;
           Eigen::Vector2d px;
-          if ((!c.inside && RayMeetsBox(t, p - t, lo, hi, 0.0, 1.0)) ||
-              !c.camera->model.Project(c.camera_from_vehicle.Apply(p), &px)) {
+          if (!SeesRoadPoint(*c.camera, c.camera_from_vehicle, c.valid, lo, hi, !c.inside, p, &px)) continue;
+          if (!c.camera->own_car.empty() &&
+              c.camera->own_car.at<uchar>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x())))) {
             continue;
           }
-          const int x = static_cast<int>(std::lround(px.x())), y = static_cast<int>(std::lround(px.y()));
-          if (x < 0 || y < 0 || x >= c.valid.cols || y >= c.valid.rows || !c.valid.at<uchar>(y, x)) continue;
-          if (!c.camera->own_car.empty() && c.camera->own_car.at<uchar>(y, x)) continue;
           seen = true;
           break;
         }

@@ -27,6 +27,14 @@ cv::Mat ModelValidMask(const CameraModel& model);
 // ModelValidMask where the camera's mask (when set) is 255 too.
 cv::Mat CameraValidMask(const RigCamera& camera);
 
+// Whether `camera` sees the road point `ground` (vehicle frame, on Y = 0), and where (`pixel`):
+// with `own_car_blocks`, the segment from its viewpoint to the point passes through no part of the
+// box [box_lo, box_hi] (the own car); the point projects into the image, onto a pixel that `valid`
+// (CameraValidMask of the camera) marks. `camera_from_vehicle`: the camera's pose inverted.
+bool SeesRoadPoint(const RigCamera& camera, const Pose& camera_from_vehicle, const cv::Mat& valid,
+                   const Eigen::Vector3d& box_lo, const Eigen::Vector3d& box_hi, bool own_car_blocks,
+                   const Eigen::Vector3d& ground, Eigen::Vector2d* pixel);
+
 // Reads a mask image for `model`: 8-bit, the model's size; pixels > 127 become 255, the others 0.
 // Throws dps::Error naming the file when it is unreadable or of another size.
 cv::Mat ReadCameraMask(const std::string& path, const CameraModel& model);
