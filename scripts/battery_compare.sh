@@ -39,6 +39,7 @@ for size in $SIZES; do
   done
   # Rendered by the base build, two at a time; a complete drive is reused.
   export BASE ROOT size
+  # shellcheck disable=SC2016  # expanded by the inner shell, from the exported variables
   printf '%s\n' "${drives[@]}" | xargs -P 2 -I{} sh -c '
     d=$1; [ -f "$d/truth.csv" ] && [ -d "$d/truth_masks" ] && exit 0
     name=$(basename "$d"); family=${name%_*}; seed=${name##*_}
