@@ -21,6 +21,8 @@ if [ $# -lt 2 ] || [ "$1" = --help ]; then
   [ "${1:-}" = --help ] && exit 0 || exit 2
 fi
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+# shellcheck source=scripts/battery_drives.sh
+. "$ROOT/scripts/battery_drives.sh"
 BASE=$1 CAND=$2
 WORK=${3:-$ROOT/out/robustness}
 SEEDS=${SEEDS:-"1000 1001 1002 1003 1004 1005 1006 1007"}
@@ -37,13 +39,8 @@ for size in $SIZES; do
   for family in $FAMILIES; do
     for seed in $SEEDS; do drives+=("$WORK/$size/drives/${family}_$seed"); done
   done
-  # Rendered by the base build, two at a time; a complete drive is reused.
-  export BASE ROOT size
-  # shellcheck disable=SC2016  # expanded by the inner shell, from the exported variables
-  printf '%s\n' "${drives[@]}" | xargs -P 2 -I{} sh -c '
-    d=$1; [ -f "$d/truth.csv" ] && [ -d "$d/truth_masks" ] && exit 0
-    name=$(basename "$d"); family=${name%_*}; seed=${name##*_}
-    "$BASE/tools/dps-synth" "$ROOT/data/scenes/$family.yaml" --size "$size" --randomize "$seed" --out "$d" --force --quiet' sh {}
+  # Rendered by the base build; a complete drive is reused.
+  for drive in "${drives[@]}"; do battery_render "$BASE/tools" "$ROOT" "$size" "$drive"; done
   echo "battery_compare.sh: $size rendered ($(( $(date +%s) - start )) s)" >&2
   for label in base candidate; do
     build=$BASE
@@ -54,11 +51,7 @@ for size in $SIZES; do
     # shellcheck disable=SC2086
     "$build/tools/dps-process" "${drives[@]}" --out "$out" --force --quiet --no-video --jobs 2 ${ARGS:-} || true
     for drive in "${drives[@]}"; do
-      name=$(basename "$drive")
-      [ -f "$out/$name/detections.csv" ] || continue
-      "$build/tools/dps-eval" --detections "$out/$name/detections.csv" --tracks "$out/$name/tracks.csv" \
-        --truth "$drive/truth.csv" --frames "$drive/frames.csv" --rig "$drive/rig_true.yaml" \
-        --masks "$drive/truth_masks" --json "$out/$name.json" >/dev/null
+      battery_score "$build/tools" "$drive" "$out/$(basename "$drive")" "$out/$(basename "$drive").json"
     done
     echo "battery_compare.sh: $size $label processed and scored ($(( $(date +%s) - start )) s)" >&2
   done

@@ -27,6 +27,8 @@ DOC=${DOC:-$ROOT/docs/robustness.md}
 CALIBRATE_SIZES=${CALIBRATE_SIZES-"640x480 320x240"}
 "$ROOT/scripts/build.sh" >/dev/null
 T="$BUILD_DIR/tools"
+# shellcheck source=scripts/battery_drives.sh
+. "$ROOT/scripts/battery_drives.sh"
 mkdir -p "$WORK"
 for seed in $SEEDS; do
   if [ "$seed" -lt 1000 ] && [ "$DOC" = "$ROOT/docs/robustness.md" ]; then
@@ -40,9 +42,7 @@ for size in $SIZES; do
   for family in $FAMILIES; do
     for seed in $SEEDS; do
       drive="$WORK/$size/drives/${family}_$seed"
-      if [ ! -f "$drive/truth.csv" ] || [ ! -d "$drive/truth_masks" ]; then
-        "$T/dps-synth" "$ROOT/data/scenes/$family.yaml" --size "$size" --randomize "$seed" --out "$drive" --force --quiet
-      fi
+      battery_render "$T" "$ROOT" "$size" "$drive"
       drives+=("$drive")
     done
     echo "robustness_table.sh: $size $family rendered ($(( $(date +%s) - start )) s)" >&2
@@ -80,20 +80,7 @@ for size in $SIZES; do
     --no-video --jobs 2 || true
   for drive in "${drives[@]}" ${calibrated[@]+"${calibrated[@]}"}; do
     name=$(basename "$drive")
-    out="$WORK/$size/out/$name"
-    if [ -f "$out/detections.csv" ]; then
-      lanes=()
-      if [ -f "$drive/truth_lanes.csv" ]; then
-        lanes=(--truth-lanes "$drive/truth_lanes.csv")
-        [ -f "$out/lanes.csv" ] && lanes+=(--lanes "$out/lanes.csv")
-        [ -f "$out/ego_lane.csv" ] && [ -f "$drive/truth_ego_lane.csv" ] &&
-          lanes+=(--ego-lane "$out/ego_lane.csv" --truth-ego-lane "$drive/truth_ego_lane.csv")
-      fi
-      "$T/dps-eval" --detections "$out/detections.csv" --tracks "$out/tracks.csv" --truth "$drive/truth.csv" \
-        --frames "$drive/frames.csv" --rig "$drive/rig_true.yaml" --masks "$drive/truth_masks" ${lanes[@]+"${lanes[@]}"} --json "$WORK/$size/$name.json" >/dev/null
-    else
-      rm -f "$WORK/$size/$name.json"
-    fi
+    battery_score "$T" "$drive" "$WORK/$size/out/$name" "$WORK/$size/$name.json"
   done
   echo "robustness_table.sh: $size processed and scored ($(( $(date +%s) - start )) s)" >&2
 done
