@@ -96,6 +96,7 @@ for size in sizes:
     print("| --- " * (len(higher) + len(lower) + 4) + "|")
     for family in families:
         a, b = family_figures(size, "base", family), family_figures(size, "candidate", family)
+        # Ties: differences under 0.0005 in a fraction, 0.005 m/s in a velocity.
         worse = [k for k in higher if a[k] is not None and (b[k] is None or b[k] < a[k] - 5e-4)]
         worse += [k for k in lower if b[k] is not None and (a[k] is None or b[k] > a[k] + (0 if k == "switches" else 5e-3))]
         if family.startswith("empty"):  # no objects: any detection is false
