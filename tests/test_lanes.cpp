@@ -9,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "check.h"
 #include "dps/camera/ego_motion.h"
@@ -314,6 +315,45 @@ void TestNaming() {
   f = dps::NameLaneLines({{-0.05, 0.0}, {3.45, 0.0}}, narrowest, &lp);
   CHECK_NEAR(f.ego.lp_m, -1.7, 1e-9);
   CHECK_EQ(f.ego.event, std::string("right"));
+  // Turning across the left line (13 degrees): a camera sees only its far end, and that line,
+  // measured with a wrong heading (8 degrees), lies 0.8 m right of where the line is known to be,
+  // on the other side of the car. It is not the right boundary: the lane is the line known and the
+  // one 3.6 m right of it.
+  const double turned = std::tan(13.0 * kPi / 180.0), wrong = std::tan(8.0 * kPi / 180.0);
+  lp.reset();
+  f = dps::NameLaneLines({{-4.3, turned, "solid", 1.0},
+                          {-0.7, turned, "dashed", 0.6},
+                          {0.1, wrong, "dashed", 0.45},
+                          {2.9, turned, "dashed", 1.0}},
+                         narrowest, &lp);
+  CHECK(f.has_ego);
+  CHECK(named(f, "right") && std::abs(*named(f, "right") - 2.9) < 1e-9);
+  CHECK(named(f, "left") && std::abs(*named(f, "left") + 0.7) < 1e-9);
+  CHECK(named(f, "left2") && std::abs(*named(f, "left2") + 4.3) < 1e-9);
+  CHECK_NEAR(f.ego.lane_width_m, 3.6 * std::cos(std::atan(turned)), 1e-9);
+  // A coasting line that has lost confidence, 0.1 m from a fresh measurement of the same line: the
+  // fresh one is the boundary whichever lies nearer the car.
+  f = dps::NameLaneLines({{-1.75, 0.0}, {1.62, 0.02, "dashed", 0.2}, {1.72, 0.0, "dashed", 0.9}}, narrowest, &lp);
+  CHECK(named(f, "right") && std::abs(*named(f, "right") - 1.72) < 1e-9);
+  CHECK(!named(f, "right2"));
+  // Lines as confident as each other are named by where they lie (the stray line above).
+  f = dps::NameLaneLines({{-1.75, 0.0}, {-0.5, 0.0}, {1.75, 0.0}}, narrowest, &lp);
+  CHECK(named(f, "left") && std::abs(*named(f, "left") + 0.5) < 1e-9);
+}
+
+// The frame's heading: lane lines are parallel; the upright edge of a car beside us, seen on the
+// road, points at the camera, 28 degrees off, with more evidence than any one line. On a curve
+// the lines' straight fits differ by a few degrees and all stay.
+void TestParallel() {
+  const auto slope = [](double deg) { return std::tan(deg * kPi / 180.0); };
+  std::vector<bool> p = dps::ParallelLines({slope(0), slope(-0.1), slope(28), slope(0.2)}, {170, 60, 70, 55}, 8.0);
+  CHECK(p[0] && p[1] && !p[2] && p[3]);
+  p = dps::ParallelLines({slope(12), slope(15), slope(10), slope(13)}, {60, 80, 30, 40}, 8.0);
+  CHECK(p[0] && p[1] && p[2] && p[3]);
+  CHECK(dps::ParallelLines({}, {}, 8.0).empty());
+  dps::LaneDetectorOptions options;
+  options.max_heading_spread_deg = 0.0;
+  CHECK_THROWS_WITH(options.Check(), dps::Error, "max_heading_spread_deg");
 }
 
 }  // namespace
@@ -323,6 +363,7 @@ int main() {
   TestFiles();
   TestScores();
   TestNaming();
+  TestParallel();
   TestDetector();
   return dps_test::Report();
 }

@@ -105,6 +105,7 @@ void LaneDetectorOptions::Check() const {
   Require(min_marking_width_m > 0 && min_marking_width_m < max_marking_width_m, "min_marking_width_m",
           min_marking_width_m, "0 < min < max_marking_width_m");
   Require(max_heading_deg >= 0 && max_heading_deg <= 60, "max_heading_deg", max_heading_deg, "0..60");
+  Require(max_heading_spread_deg > 0, "max_heading_spread_deg", max_heading_spread_deg, "> 0 deg");
   Require(min_support > 0 && min_support <= 1, "min_support", min_support, "0 < share <= 1");
   Require(solid_support >= min_support && solid_support <= 1, "solid_support", solid_support, "min_support..1");
   Require(min_lane_width_m > 0, "min_lane_width_m", min_lane_width_m, "> 0");
@@ -248,21 +249,57 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     }
     lines.push_back(l);
   }
+  std::vector<double> line_slopes, line_votes;
+  for (const Line& l : lines) line_slopes.push_back(l.slope), line_votes.push_back(l.votes);
+  const std::vector<bool> parallel = ParallelLines(line_slopes, line_votes, o.max_heading_spread_deg);
   std::vector<LaneLine> found;
-  for (const Line& l : lines) {
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const Line& l = lines[i];
+    if (!parallel[i]) continue;
     found.push_back({l.offset, l.slope, l.Support() >= o.solid_support ? "solid" : "dashed",
                      std::min(1.0, l.votes * o.cell_m / 3.0)});
   }
   return NameLaneLines(found, o.min_lane_width_m, &previous_lp_);
 }
 
+std::vector<bool> ParallelLines(const std::vector<double>& slopes, const std::vector<double>& weights,
+                                double max_spread_deg) {
+  const size_t n = std::min(slopes.size(), weights.size());
+  const auto parallel = [&](size_t a, size_t b) {
+    return std::abs(std::atan(slopes[a]) - std::atan(slopes[b])) * kDegPerRad <= max_spread_deg;
+  };
+  // The frame's heading: the line's whose parallel lines weigh the most.
+  size_t frame = 0;
+  double most = -1;
+  for (size_t i = 0; i < n; ++i) {
+    double w = 0;
+    for (size_t k = 0; k < n; ++k) w += parallel(i, k) ? weights[k] : 0.0;
+    if (w > most) most = w, frame = i;
+  }
+  std::vector<bool> out(n);
+  for (size_t i = 0; i < n; ++i) out[i] = parallel(i, frame);
+  return out;
+}
+
 LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_width_m,
                         std::optional<double>* previous_lp) {
   LaneFrame out;
+  // Two boundaries lie a lane apart at least: a line closer than the narrowest lane (across them)
+  // to a more confident one is not one (lines as confident as each other are named by where they
+  // lie, below).
+  std::vector<LaneLine> apart;
+  for (const LaneLine& l : lines) {
+    bool alone = true;
+    for (const LaneLine& k : lines) {
+      const double across = std::abs(l.offset_m - k.offset_m) * std::cos(std::atan((l.slope + k.slope) / 2));
+      alone = alone && !(k.confidence > l.confidence && across < min_lane_width_m);
+    }
+    if (alone) apart.push_back(l);
+  }
   // The ego lane's boundaries and its neighbours' outer ones.
   const LaneLine* left = nullptr;
   const LaneLine* right = nullptr;
-  for (const LaneLine& l : lines) {
+  for (const LaneLine& l : apart) {
     if (l.offset_m < 0 && (!left || l.offset_m > left->offset_m)) left = &l;
     if (l.offset_m > 0 && (!right || l.offset_m < right->offset_m)) right = &l;
   }
@@ -285,7 +322,7 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
   const double right2_above = right ? right->offset_m + min_lane_width_m : left ? left->offset_m + widest : infinity;
   const LaneLine* left2 = nullptr;
   const LaneLine* right2 = nullptr;
-  for (const LaneLine& l : lines) {
+  for (const LaneLine& l : apart) {
     if (l.offset_m < left2_below && (!left2 || l.offset_m > left2->offset_m)) left2 = &l;
     if (l.offset_m > right2_above && (!right2 || l.offset_m < right2->offset_m)) right2 = &l;
   }

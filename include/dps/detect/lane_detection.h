@@ -3,16 +3,18 @@
 // markings any camera on the car has: each frame the road around the car is resampled into a
 // bird's-eye view (each ground cell from the camera on its side, else the other; never where the
 // own car hides the road or outside the cameras' valid pixels); bright stripes between
-// min_marking_width_m and max_marking_width_m wide are marking evidence; straight lines
-// x = offset + tan(heading) z through it (offsets every cell, headings up to max_heading_deg) are
-// voted for, one vote per bird's-eye row, and the lines whose votes cover min_support of the rows
-// where they are seen are boundaries: the nearest on each side of the car is the ego lane's
-// (left, right), the next beyond at least min_lane_width_m out its neighbour's (left2, right2).
-// Each is refined by least squares on its evidence; solid when its evidence covers solid_support
-// of its rows. From left and right: the lateral position (lp), the lane's width and the heading;
-// a jump of lp by more than half a lane is a lane change (a "lane" wider than twice
-// min_lane_width_m is two, the line between them missed, and one narrower than min_lane_width_m
-// across is none, one of its lines no boundary: no lp then).
+// min_marking_width_m and max_marking_width_m wide are marking evidence; straight lines x = offset
+// + tan(heading) z through it (offsets every cell, headings up to max_heading_deg) are voted for,
+// one vote per bird's-eye row, and the lines whose votes cover min_support of the rows where they
+// are seen, refined by least squares on their evidence, are candidates. Boundaries are parallel (a
+// line turned away from the frame's heading is an upright edge of an object, which points at the
+// camera) and a lane apart (of two lines closer, the one with less evidence is none); of those left
+// the nearest on each side of the car is the ego lane's (left, right), the next beyond at least
+// min_lane_width_m out its neighbour's (left2, right2). A boundary is solid when its evidence
+// covers solid_support of its rows. From left and right: the lateral position (lp), the lane's
+// width and the heading; a jump of lp by more than half a lane is a lane change (a "lane" wider
+// than twice min_lane_width_m is two, the line between them missed, and one narrower than
+// min_lane_width_m across is none, one of its lines no boundary: no lp then).
 #pragma once
 
 #include <optional>
@@ -34,6 +36,11 @@ struct LaneDetectorOptions {
   double min_marking_width_m = 0.08;  // stripes of this width ...
   double max_marking_width_m = 0.3;   // ... up to this, > min
   double max_heading_deg = 40.0;     // lines turned further from the car's axis are not sought, 0..60
+  // A frame's boundaries are parallel: a line turned further than this from the heading that most
+  // of the frame's evidence agrees on is none (an object's upright edge seen on the road, which
+  // points at the camera). Straight fits of parallel lines on a 50 m radius seen over different
+  // stretches of the view differ by up to 4 degrees; deg, > 0.
+  double max_heading_spread_deg = 8.0;
   double min_support = 0.15;         // share of its seen rows a boundary's evidence must cover, 0..1
   double solid_support = 0.6;        // ... and a solid line's, 0..1
   double min_lane_width_m = 2.5;     // the neighbour's outer boundary at least this beyond, > 0
@@ -58,7 +65,16 @@ struct LaneLine {
   double confidence = 1.0;
 };
 
-// A frame's lanes from its lines: the nearest on each side of the car are the ego lane's (left,
+// Which of a frame's lines (slopes: tan of their headings) are parallel to the frame's heading:
+// within max_spread_deg of the line whose lines within max_spread_deg of it weigh the most (weights:
+// their evidence; at equal weight the earlier line's).
+std::vector<bool> ParallelLines(const std::vector<double>& slopes, const std::vector<double>& weights,
+                                double max_spread_deg);
+
+// A frame's lanes from its lines: a line less confident than another one closer to it than
+// min_lane_width_m across is none (two boundaries lie a lane apart: e.g. a line the car straddles,
+// measured where a camera sees a little of it, with a wrong heading, next to where it is known to
+// be); of the others, the nearest on each side of the car are the ego lane's (left,
 // right), the next beyond at least min_lane_width_m out its neighbours' (left2, right2). No lane is
 // wider than twice min_lane_width_m and the car is inside its own: when the nearest lines on the
 // two sides lie farther apart than that (the ego lane's line on one side missed), the one farther
