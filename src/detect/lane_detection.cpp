@@ -94,6 +94,11 @@ cv::Mat Evidence(const cv::Mat& response, const cv::Mat& seen, int scale) {
   return evidence & seen;
 }
 
+// The distance across two lines (perpendicular to their mean heading), m.
+double Across(const LaneLine& a, const LaneLine& b) {
+  return std::abs(a.offset_m - b.offset_m) * std::cos(std::atan((a.slope + b.slope) / 2));
+}
+
 }  // namespace
 
 void LaneDetectorOptions::Check() const {
@@ -291,8 +296,7 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
   for (const LaneLine& l : lines) {
     bool alone = true;
     for (const LaneLine& k : lines) {
-      const double across = std::abs(l.offset_m - k.offset_m) * std::cos(std::atan((l.slope + k.slope) / 2));
-      alone = alone && !(k.confidence > l.confidence && across < min_lane_width_m);
+      alone = alone && !(k.confidence > l.confidence && Across(l, k) < min_lane_width_m);
     }
     if (alone) apart.push_back(l);
   }
@@ -333,10 +337,10 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
   // A lane narrower than the narrowest is no lane (a line that is not a boundary, e.g. an edge on
   // the road the car is turning onto).
   const double heading = left && right ? std::atan((left->slope + right->slope) / 2) : 0.0;
-  if (left && right && (right->offset_m - left->offset_m) * std::cos(heading) >= min_lane_width_m) {
+  if (left && right && Across(*left, *right) >= min_lane_width_m) {
     out.has_ego = true;
     out.ego.lp_m = -(left->offset_m + right->offset_m) / 2;
-    out.ego.lane_width_m = (right->offset_m - left->offset_m) * std::cos(heading);
+    out.ego.lane_width_m = Across(*left, *right);
     out.ego.heading_deg = -heading * kDegPerRad;
     if (*previous_lp && std::abs(out.ego.lp_m - **previous_lp) > out.ego.lane_width_m / 2) {
       out.ego.event = out.ego.lp_m > **previous_lp ? "left" : "right";
