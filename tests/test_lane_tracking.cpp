@@ -151,11 +151,47 @@ void TestStray() {
   CHECK_THROWS_WITH(bad.Check(), dps::Error, "gate_m");
 }
 
+// The right line, in four frames, measured only far ahead (7-10 m) and fitted there with a heading
+// 10 degrees off, so that it extrapolates to 0.25 m at the car's axis: compared where it was seen it
+// is the tracked line, and neither a line beside the car nor the loss of the right boundary follows.
+void TestSeenAhead() {
+  dps::LaneTracker tracker;
+  const dps::PlanarPose still;
+  dps::LaneBoundaryRow left, right;
+  left.boundary = "left", left.offset_m = -1.75, left.type = "solid";
+  right.boundary = "right", right.offset_m = 1.75, right.type = "dashed";
+  const dps::LaneStretch whole{-4.0, 10.0}, ahead{7.0, 10.0};
+  double worst = 0.0;
+  int inside = 0, frames_with_right = 0;
+  for (int f = 0; f < 30; ++f) {
+    dps::LaneFrame m;
+    m.boundaries = {left, right};
+    m.seen = {whole, whole};
+    if (f >= 10 && f < 14) {
+      m.boundaries[1].heading_deg = 10.0;
+      m.boundaries[1].offset_m = 1.75 - std::tan(10.0 * kDeg) * ahead.Middle();
+      m.seen[1] = ahead;
+    }
+    const dps::LaneFrame out = tracker.Update(m, f > 0 ? &still : nullptr, f / kFps);
+    for (const dps::LaneBoundaryRow& b : out.boundaries) inside += std::abs(b.offset_m) < 1.0;
+    bool found = false;
+    const double r = OffsetOf(out, "right", &found);
+    frames_with_right += found;
+    if (found) worst = std::max(worst, std::abs(r - 1.75));
+  }
+  std::printf("seen ahead: right boundary in %d of 30 frames, worst offset error %.3f m, %d lines inside 1 m\n",
+              frames_with_right, worst, inside);
+  CHECK_EQ(frames_with_right, 30);
+  CHECK(worst < 0.15);
+  CHECK_EQ(inside, 0);
+}
+
 }  // namespace
 
 int main() {
   TestGap();
   TestLaneChange();
   TestStray();
+  TestSeenAhead();
   return dps_test::Report();
 }

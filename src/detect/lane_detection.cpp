@@ -19,6 +19,7 @@ namespace {
 struct Line {
   double offset = 0.0, slope = 0.0;
   int votes = 0, seen_rows = 0;
+  LaneStretch evidence{};  // where along the car its evidence lies
   double Support() const { return seen_rows > 0 ? static_cast<double>(votes) / seen_rows : 0.0; }
 };
 
@@ -233,6 +234,7 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     Line l = best[a];
     // Its rows where the view sees the road under it; then least squares on its evidence.
     double sz = 0, sx = 0, szz = 0, szx = 0;
+    double near = std::numeric_limits<double>::infinity(), far = -near;
     int n = 0;
     const int reach = static_cast<int>(std::ceil(o.max_marking_width_m / o.cell_m));
     for (int r = 0; r < height_; ++r) {
@@ -244,6 +246,7 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
         if (!evidence.at<std::uint8_t>(r, d)) continue;
         const double xd = -o.lateral_m + (d + 0.5) * o.cell_m;
         sz += z, sx += xd, szz += z * z, szx += z * xd, ++n;
+        near = std::min(near, z), far = std::max(far, z);
       }
     }
     if (l.Support() < o.min_support || l.seen_rows * o.cell_m < 1.0) continue;
@@ -252,6 +255,7 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
       l.slope = (n * szx - sz * sx) / det;
       l.offset = (sx - l.slope * sz) / n;
     }
+    if (n > 0) l.evidence = {near, far};
     lines.push_back(l);
   }
   std::vector<double> line_slopes, line_votes;
@@ -262,7 +266,7 @@ LaneFrame LaneDetector::Detect(const cv::Mat& left_grey, const cv::Mat& right_gr
     const Line& l = lines[i];
     if (!parallel[i]) continue;
     found.push_back({l.offset, l.slope, l.Support() >= o.solid_support ? "solid" : "dashed",
-                     std::min(1.0, l.votes * o.cell_m / 3.0)});
+                     std::min(1.0, l.votes * o.cell_m / 3.0), l.evidence});
   }
   return NameLaneLines(found, o.min_lane_width_m, &previous_lp_);
 }
@@ -332,7 +336,9 @@ LaneFrame NameLaneLines(const std::vector<LaneLine>& lines, double min_lane_widt
   }
   const std::pair<const char*, const LaneLine*> named[] = {{"left2", left2}, {"left", left}, {"right", right}, {"right2", right2}};
   for (const auto& [name, l] : named) {
-    if (l) out.boundaries.push_back({0, 0.0, name, l->offset_m, std::atan(l->slope) * kDegPerRad, 0.0, l->type, l->confidence});
+    if (!l) continue;
+    out.boundaries.push_back({0, 0.0, name, l->offset_m, std::atan(l->slope) * kDegPerRad, 0.0, l->type, l->confidence});
+    out.seen.push_back(l->seen);
   }
   // A lane narrower than the narrowest is no lane (a line that is not a boundary, e.g. an edge on
   // the road the car is turning onto).

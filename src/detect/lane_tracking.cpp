@@ -69,13 +69,26 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
     size_t track, measurement;
   };
   const std::vector<LaneBoundaryRow>& m = measured.boundaries;
+  // Each measurement where it was seen: its point at the middle of its stretch and its slope
+  // (y = H x of a line x = (offset, slope)); a line's heading is known the less the shorter the
+  // stretch it was fitted on (its ends each off by the offset's noise).
+  std::vector<Eigen::Matrix2d> H(m.size()), R(m.size());
+  std::vector<Eigen::Vector2d> y(m.size());
+  for (size_t j = 0; j < m.size(); ++j) {
+    const LaneStretch seen = j < measured.seen.size() ? measured.seen[j] : LaneStretch{};
+    const double slope = std::tan(m[j].heading_deg * kRadPerDeg), z = seen.Middle();
+    H[j] << 1.0, z, 0.0, 1.0;
+    y[j] = Eigen::Vector2d(m[j].offset_m + slope * z, slope);
+    const double sigma = seen.Length() > 0 ? std::max(slope_sigma, 2 * o.offset_sigma_m / seen.Length()) : slope_sigma;
+    R[j] = Eigen::Vector2d(o.offset_sigma_m * o.offset_sigma_m, sigma * sigma).asDiagonal();
+  }
   std::vector<Pair> pairs;
   // A measurement within gate_m of a line that another measurement updates does not start a line
   // of its own (two measurements of one boundary).
   std::vector<bool> near_a_line(m.size(), false);
   for (size_t i = 0; i < tracks_.size(); ++i) {
     for (size_t j = 0; j < m.size(); ++j) {
-      const double d = std::abs(tracks_[i].x.x() - m[j].offset_m);
+      const double d = std::abs((H[j] * tracks_[i].x - y[j]).x());
       if (d > o.gate_m) continue;
       near_a_line[j] = true;
       pairs.push_back({d, i, j});
@@ -83,18 +96,15 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
   }
   std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
   std::vector<bool> track_used(tracks_.size(), false), measurement_used(m.size(), false);
-  Eigen::Matrix2d R = Eigen::Matrix2d::Zero();
-  R(0, 0) = o.offset_sigma_m * o.offset_sigma_m;
-  R(1, 1) = slope_sigma * slope_sigma;
   for (const Pair& p : pairs) {
     if (track_used[p.track] || measurement_used[p.measurement]) continue;
     track_used[p.track] = measurement_used[p.measurement] = true;
     Track& t = tracks_[p.track];
     const LaneBoundaryRow& b = m[p.measurement];
-    const Eigen::Vector2d z(b.offset_m, std::tan(b.heading_deg * kRadPerDeg));
-    const Eigen::Matrix2d K = t.P * (t.P + R).inverse();
-    t.x += K * (z - t.x);
-    t.P = (Eigen::Matrix2d::Identity() - K) * t.P;
+    const size_t j = p.measurement;
+    const Eigen::Matrix2d K = t.P * H[j].transpose() * (H[j] * t.P * H[j].transpose() + R[j]).inverse();
+    t.x += K * (y[j] - H[j] * t.x);
+    t.P = (Eigen::Matrix2d::Identity() - K * H[j]) * t.P;
     t.last_measured_s = t_s;
     ++t.measurements;
     t.frames_when_measured = t.frames;
@@ -104,8 +114,10 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
   for (size_t j = 0; j < m.size(); ++j) {
     if (measurement_used[j] || near_a_line[j]) continue;
     Track t;
-    t.x = Eigen::Vector2d(m[j].offset_m, std::tan(m[j].heading_deg * kRadPerDeg));
-    t.P = R;
+    // At the axis, extrapolated from where it was seen.
+    const Eigen::Matrix2d Hinv = H[j].inverse();
+    t.x = Hinv * y[j];
+    t.P = Hinv * R[j] * Hinv.transpose();
     t.last_measured_s = t_s;
     t.measurements = 1;
     t.frames = t.frames_when_measured = 1;

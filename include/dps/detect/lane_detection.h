@@ -50,9 +50,19 @@ struct LaneDetectorOptions {
   void Check() const;
 };
 
+// Where along the car (the vehicle frame's Z, m) a line's evidence lies: from near_m to far_m.
+// Its offset and heading are extrapolated from there to the car's axis (near_m = far_m = 0: seen
+// at the axis).
+struct LaneStretch {
+  double near_m = 0.0, far_m = 0.0;
+  double Middle() const { return (near_m + far_m) / 2; }
+  double Length() const { return far_m - near_m; }
+};
+
 // One frame's lanes (frame and t left 0: the caller's).
 struct LaneFrame {
   std::vector<LaneBoundaryRow> boundaries;
+  std::vector<LaneStretch> seen;  // per boundary where it was seen (empty: each at the car's axis)
   bool has_ego = false;  // both of the ego lane's boundaries found
   EgoLaneRow ego;
 };
@@ -63,6 +73,7 @@ struct LaneLine {
   double offset_m = 0.0, slope = 0.0;
   std::string type = "dashed";
   double confidence = 1.0;
+  LaneStretch seen{};
 };
 
 // Which of a frame's lines (slopes: tan of their headings) are parallel to the frame's heading:

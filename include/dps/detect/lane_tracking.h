@@ -7,8 +7,11 @@
 // since the previous frame (CAN speed and yaw rate: two of each line's points moved with the
 // vehicle, the line through them; the covariance through that map's Jacobian), plus process noise
 // for what the motion does not explain (the road's own curvature, steering between samples). The
-// frame's measured lines (LaneDetector) update the line nearest in offset within gate_m, nearest
-// pairs first; a measurement farther than gate_m from every line starts one; a line not measured
+// frame's measured lines (LaneDetector) update the line nearest within gate_m where they were seen
+// (across, at the middle of the stretch their evidence covers: a line seen only far ahead is
+// compared there, not where its heading extrapolates it to at the car), nearest pairs first, as a
+// point there and a heading known the less the shorter that stretch; a measurement farther than
+// gate_m from every line starts one; a line not measured
 // for max_coast_s is dropped, one measured in fewer than min_measurements frames not reported yet,
 // one not measured this frame only when measured in min_coast_share of its frames until then. The
 // frame's lanes are then named from the reported lines as the detector names its own
