@@ -1,7 +1,8 @@
 // Lane tracking: measured boundaries (the road's lines seen from the car's true poses, with noise)
 // fed to the tracker with the car's motion, and the tracked lanes compared with the truth: on a
 // straight drive through a 1.3 s gap in the measurements, through a lane change whose middle is not
-// measured, and with a stray line measured once.
+// measured, with a stray line measured once and with a line measured far ahead with a wrong
+// heading.
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -156,7 +157,8 @@ void TestStray() {
 // is the tracked line, and neither a line beside the car nor the loss of the right boundary follows.
 void TestSeenAhead() {
   dps::LaneTracker tracker;
-  const dps::PlanarPose still;
+  dps::PlanarPose ahead_10mps;  // straight on at 10 m/s
+  ahead_10mps.z_m = 10.0 / kFps;
   dps::LaneBoundaryRow left, right;
   left.boundary = "left", left.offset_m = -1.75, left.type = "solid";
   right.boundary = "right", right.offset_m = 1.75, right.type = "dashed";
@@ -172,7 +174,7 @@ void TestSeenAhead() {
       m.boundaries[1].offset_m = 1.75 - std::tan(10.0 * kDeg) * ahead.Middle();
       m.seen[1] = ahead;
     }
-    const dps::LaneFrame out = tracker.Update(m, f > 0 ? &still : nullptr, f / kFps);
+    const dps::LaneFrame out = tracker.Update(m, f > 0 ? &ahead_10mps : nullptr, f / kFps);
     for (const dps::LaneBoundaryRow& b : out.boundaries) inside += std::abs(b.offset_m) < 1.0;
     bool found = false;
     const double r = OffsetOf(out, "right", &found);
