@@ -79,7 +79,7 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
     const double slope = std::tan(m[j].heading_deg * kRadPerDeg), z = seen.Middle();
     H[j] << 1.0, z, 0.0, 1.0;
     y[j] = Eigen::Vector2d(m[j].offset_m + slope * z, slope);
-    const double sigma = seen.Length() > 0 ? std::max(slope_sigma, 2 * o.offset_sigma_m / seen.Length()) : slope_sigma;
+    const double sigma = seen.Length() > 0 ? 2 * o.offset_sigma_m / seen.Length() : slope_sigma;
     R[j] = Eigen::Vector2d(o.offset_sigma_m * o.offset_sigma_m, sigma * sigma).asDiagonal();
   }
   std::vector<Pair> pairs;
