@@ -1,8 +1,8 @@
 // Lane tracking: measured boundaries (the road's lines seen from the car's true poses, with noise)
 // fed to the tracker with the car's motion, and the tracked lanes compared with the truth: on a
-// straight drive through a 1.3 s gap in the measurements, through a lane change whose middle is not
-// measured, with a stray line measured once and with a line measured far ahead with a wrong
-// heading.
+// straight drive through a 1.3 s gap in the measurements, standing beside a gap, through a lane
+// change whose middle is not measured, with a stray line measured once and with a line measured far
+// ahead with a wrong heading.
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -112,6 +112,18 @@ void TestGap() {
   CHECK(long_gap.frames_without <= 10);
 }
 
+void TestStanding() {
+  // Braking from 8 m/s to a stop beside a gap in the dashes, standing 4 s and pulling away: no
+  // measurement from the stop until 0.5 s after pulling away (4.5 s, three times max_coast_s).
+  const dps::MotionProfile stop({{0.0, 8.0, 0.0}, {1.0, 8.0, 0.0}, {2.0, 0.0, 0.0}, {6.0, 0.0, 0.0}, {7.0, 5.0, 0.0}});
+  const Run r = Drive(stop, 8.0, [](int f) { return f < 30 || f >= 98; });
+  std::printf("standing 4 s beside a gap: worst ego boundary error %.3f m, %d frames without both\n", r.worst_error_m,
+              r.frames_without);
+  CHECK_EQ(r.frames_without, 0);
+  CHECK(r.worst_error_m < 0.1);
+  CHECK_EQ(r.left_changes + r.right_changes, 0);
+}
+
 void TestLaneChange() {
   // One lane to the right at 15 m/s: yaw right for 1.5 s, back for 1.5 s (3.6 m across); the
   // frames of its middle (1.5 s to 2.1 s after it starts) not measured.
@@ -192,6 +204,7 @@ void TestSeenAhead() {
 
 int main() {
   TestGap();
+  TestStanding();
   TestLaneChange();
   TestStray();
   TestSeenAhead();

@@ -41,7 +41,14 @@ LaneFrame LaneTracker::Update(const LaneFrame& measured, const PlanarPose* curre
   const LaneTrackerOptions& o = options_;
   // The first frame's lines stand as the detector found them: no earlier frame to confirm them.
   const bool first = !last_t_s_;
-  const double dt = last_t_s_ ? std::max(0.0, t_s - *last_t_s_) : 0.0;
+  // A car standing still (CAN speed and yaw rate 0) sees its lines where they were: they do not
+  // drift, and standing beside a gap in the dashes does not use up their coasting time.
+  const bool standing = current_in_previous && current_in_previous->x_m == 0 && current_in_previous->z_m == 0 &&
+                        current_in_previous->heading_rad == 0;
+  const double dt = last_t_s_ && !standing ? std::max(0.0, t_s - *last_t_s_) : 0.0;
+  if (standing && last_t_s_) {
+    for (Track& t : tracks_) t.last_measured_s += t_s - *last_t_s_;
+  }
   last_t_s_ = t_s;
   // Predict: carried by the motion, with the drift the motion does not explain.
   const double slope_sigma = std::tan(o.heading_sigma_deg * kRadPerDeg);

@@ -6,7 +6,9 @@
 // with its covariance. Per frame the lines are carried into the new vehicle frame by the motion
 // since the previous frame (CAN speed and yaw rate: two of each line's points moved with the
 // vehicle, the line through them; the covariance through that map's Jacobian), plus process noise
-// for what the motion does not explain (the road's own curvature, steering between samples). The
+// for what the motion does not explain (the road's own curvature, steering between samples); while
+// the car stands still (no motion at all) the lines stay where they are, without drift, and the
+// time standing is not coasting time (a car stopped beside a gap in the dashes keeps them). The
 // frame's measured lines (LaneDetector) update the line nearest within gate_m where they were seen
 // (across, at the middle of the stretch their evidence covers: a line seen only far ahead is
 // compared there, not where its heading extrapolates it to at the car), nearest pairs first, as a
