@@ -12,10 +12,11 @@
 // frame's measured lines (LaneDetector) update the line nearest within gate_m where they were seen
 // (across, at the middle of the stretch their evidence covers: a line seen only far ahead is
 // compared there, not where its heading extrapolates it to at the car), nearest pairs first, as a
-// point there and a heading known the less the shorter that stretch; a measurement farther than
-// gate_m from every line starts one; a line not measured
-// for max_coast_s is dropped, one measured in fewer than min_measurements frames not reported yet,
-// one not measured this frame only when measured in min_coast_share of its frames until then. The
+// point there (offset_sigma_m) and a heading known the less the shorter that stretch (its two ends
+// each off by offset_sigma_m); a measurement farther than gate_m from every line starts one; a
+// line not measured for max_coast_s is dropped, one measured in fewer than min_measurements frames
+// not reported yet, one not measured this frame only when measured in min_coast_share of its
+// frames until then. The
 // frame's lanes are then named from the reported lines as the detector names its own
 // (NameLaneLines): a coasting line keeps its type and loses confidence linearly over max_coast_s.
 #pragma once
@@ -35,7 +36,8 @@ struct LaneTrackerOptions {
   double max_coast_s = 1.5;           // a line unmeasured this long is dropped, s > 0
   double gate_m = 0.5;                // a measurement this close in offset updates a line, m > 0
   double offset_sigma_m = 0.05;       // a measured offset's noise, m > 0
-  double heading_sigma_deg = 1.0;     // a measured heading's noise, deg > 0
+  double heading_sigma_deg = 1.0;     // a measured heading's noise when the stretch it was fitted on
+                                      // is not known (LaneFrame::seen; else from its length), deg > 0
   double offset_drift_mps = 0.3;      // process noise: lateral drift the motion does not explain, m/s > 0
   double heading_drift_dps = 2.0;     // ... and turning, deg/s > 0
   int min_measurements = 2;           // a line is reported once measured in this many frames (>= 1;
