@@ -187,6 +187,10 @@ Scores DetectAndScore(const dps::Scene& scene, const char* label) {
     const dps::LaneFrame detected = detector.Detect(dps::GreyImage(renderer.Render(st, left, f).image),
                                                     dps::GreyImage(renderer.Render(st, 1 - left, f).image));
     const dps::PlanarPose motion = f > 0 ? scene.ego.Integrate({}, scene.FrameTime(f - 1), st.t_s) : dps::PlanarPose();
+    // Each boundary found carries the stretch of the bird's-eye view (4 m behind to 10 m ahead)
+    // where its evidence lies, which the tracker compares it at.
+    CHECK_EQ(detected.seen.size(), detected.boundaries.size());
+    for (const dps::LaneStretch& seen : detected.seen) CHECK(seen.near_m >= -4.0 && seen.near_m < seen.far_m && seen.far_m <= 10.0);
     const dps::LaneFrame tracked = tracker.Update(detected, f > 0 ? &motion : nullptr, st.t_s);
     for (int k = 0; k < 2; ++k) {
       const dps::LaneFrame& lanes = k == 0 ? detected : tracked;
