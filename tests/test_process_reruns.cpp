@@ -1,7 +1,7 @@
-// dps-process run as a batch system runs it: the same drive processed twice, in a batch with
-// --jobs 2, and killed with SIGKILL in the middle and then run again, always gives byte-identical
-// outputs (timings in summary.json aside), and a killed run leaves nothing under the final name and
-// no temporary folder after the next run.
+// dps-process run as a batch system runs it: the same drive processed twice, with one and with
+// five OpenCV threads, in a batch with --jobs 2, and killed with SIGKILL in the middle and then
+// run again, always gives byte-identical outputs (timings in summary.json aside), and a killed run
+// leaves nothing under the final name and no temporary folder after the next run.
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -73,6 +73,7 @@ std::string Process(const std::string& drives, const fs::path& out, const std::s
 // work, kills it with SIGKILL, and returns whether it was killed before it finished.
 bool KillMidway(const fs::path& drive, const fs::path& out) {
   fs::create_directories(out);
+  std::fflush(stdout);  // the child's freopen would write what is buffered a second time
   const pid_t child = fork();
   if (child == 0) {
     const std::string tool = (kTools / "dps-process").string(), d = drive.string(), o = out.string();
@@ -107,6 +108,13 @@ int main() {
   // Run again.
   CHECK_EQ(Run(Process("'" + drive.string() + "'", kWork / "again")), 0);
   CHECK(CompareOutputs(kWork / "first" / "d", kWork / "again" / "d", "rerun") >= 5);
+  // With one OpenCV worker thread and with five (OpenCV reads OPENCV_FOR_THREADS_NUM at start):
+  // every parallel loop splits its work differently, the outputs stay the same.
+  for (const int threads : {1, 5}) {
+    const std::string name = "threads" + std::to_string(threads);
+    CHECK_EQ(Run("OPENCV_FOR_THREADS_NUM=" + std::to_string(threads) + " " + Process("'" + drive.string() + "'", kWork / name)), 0);
+    CHECK(CompareOutputs(kWork / "first" / "d", kWork / name / "d", std::to_string(threads) + " OpenCV thread(s)") >= 5);
+  }
   // In a batch of two drives with two jobs.
   fs::copy(drive, kWork / "drives" / "e", fs::copy_options::recursive);
   CHECK_EQ(Run(Process("'" + drive.string() + "' '" + (kWork / "drives" / "e").string() + "'", kWork / "jobs", "--jobs 2")), 0);
