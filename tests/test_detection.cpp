@@ -1,7 +1,8 @@
 // Tests of obstacle detection and scoring: the column histogram of a known disparity image,
 // the front projection against hand-computed points, fusion of parts, the scoring rules of
-// DESIGN.md §5 on hand-made cases, and front detection on rendered drives with known truth
-// (a lead car, the empty road, a pole beyond a parked car, two cars parked in a row).
+// DESIGN.md §5 on hand-made cases (tracks' velocity errors too), and front detection on rendered
+// drives with known truth (a lead car, the empty road, a pole beyond a parked car, two cars parked
+// in a row).
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -16,6 +17,7 @@
 #include "dps/detect/front_detection.h"
 #include "dps/eval/evaluation.h"
 #include "dps/eval/visibility.h"
+#include "dps/map/tracker.h"
 #include "dps/pipeline/surround_pipeline.h"
 #include "dps/pipeline/drive_processing.h"
 #include "dps/stereo/sad_stereo.h"
@@ -471,6 +473,53 @@ void TestEvaluation() {
 
 // Front detection on rendered drives: the lead car found at its true range in every frame where
 // its back is within 20 m, and nothing within 20 m on the empty road.
+// Tracks' velocity errors: a pole standing at (3, 5) tracked at 0.2 m/s and a car driving at
+// 10 m/s tracked at 9, 8 and 13 m/s over three frames. All six matches: median 1 m/s (nearest
+// rank of 0.2, 0.2, 0.2, 1, 2, 3); the car's alone (moving at 0.5 m/s or more): median 2, 90th
+// percentile 3 m/s; with a moving speed above every object's, none.
+void TestTrackVelocities() {
+  std::vector<dps::TruthRow> truth;
+  std::vector<dps::TrackState> tracks;
+  const double car_vz[] = {9.0, 8.0, 13.0};
+  for (int f = 0; f < 3; ++f) {
+    truth.push_back({f, f / 15.0, 1, "pole", 3.0, 5.0, 0.0, 0.2, 0.2, 3.0, 0.0, 0.0});
+    truth.push_back({f, f / 15.0, 2, "car", 0.0, 12.0, 0.0, 4.5, 1.8, 1.5, 0.0, 10.0});
+    for (const int id : {1, 2}) {
+      dps::TrackState t;
+      t.frame = f;
+      t.t_s = f / 15.0;
+      t.id = id;
+      t.confirmed = true;
+      t.x_m = id == 1 ? 3.0 : 0.0;
+      t.z_m = id == 1 ? 5.0 : 10.0;
+      t.vx_mps = id == 1 ? 0.2 : 0.0;
+      t.vz_mps = id == 1 ? 0.0 : car_vz[f];
+      tracks.push_back(t);
+    }
+  }
+  dps::EvaluationOptions o;
+  const dps::BandScore all = dps::EvaluateTracks(tracks, truth, o).positions.overall;
+  std::printf("track velocities: median %.3f m/s over %zu matches, moving objects median %.3f / p90 %.3f m/s over %zu\n",
+              all.MedianVelocityError(), all.velocity_errors_mps.size(), all.MedianMovingVelocityError(),
+              all.MovingVelocityErrorP90(), all.moving_velocity_errors_mps.size());
+  CHECK_EQ(all.velocity_errors_mps.size(), size_t{6});
+  CHECK_NEAR(all.MedianVelocityError(), 1.0, 1e-9);
+  CHECK_EQ(all.moving_velocity_errors_mps.size(), size_t{3});
+  CHECK_NEAR(all.MedianMovingVelocityError(), 2.0, 1e-9);
+  CHECK_NEAR(all.MovingVelocityErrorP90(), 3.0, 1e-9);
+  o.moving_speed_mps = 10.5;
+  const dps::BandScore none = dps::EvaluateTracks(tracks, truth, o).positions.overall;
+  CHECK(none.moving_velocity_errors_mps.empty() && std::isnan(none.MedianMovingVelocityError()));
+  o.moving_speed_mps = -1.0;
+  bool threw = false;
+  try {
+    dps::EvaluateTracks(tracks, truth, o);
+  } catch (const dps::Error&) {
+    threw = true;
+  }
+  CHECK(threw);
+}
+
 void TestRenderedFront() {
   for (const char* name : {"lead_car", "empty_road"}) {
     dps::Scene scene = dps_test::SmallScene(name);
@@ -916,6 +965,7 @@ int main() {
   TestHidden();
   TestVisibility();
   TestEvaluation();
+  TestTrackVelocities();
   TestFrontCoverage();
   TestSideCoverage();
   TestRenderedFront();

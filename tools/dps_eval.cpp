@@ -37,8 +37,9 @@ pedestrian, cyclist, motorbike: pedestrian; pole, post: pole; others: unknown).
 
   --detections FILE   detections.csv
   --tracks FILE       tracks.csv: scored the same way on (x, z), plus the median velocity error
-                      |v_track - v_truth| and the identity switches (a truth object matched by a
-                      different track than before)
+                      |v_track - v_truth| (of all matches, and the median and 90th percentile of
+                      the matches whose object moves at 0.5 m/s or more) and the identity
+                      switches (a truth object matched by a different track than before)
   --truth FILE        truth.csv
   --frames FILE       the drive's frames.csv: every frame it lists counts for the frames with and
                       without a detection, also one without objects or detections (without it, the
@@ -147,8 +148,11 @@ int main(int argc, char** argv) {
       dps::CheckSameDrive(frames, truth, args.Get("tracks"), args.Get("truth"));
       const dps::TrackEvaluation r = dps::EvaluateTracks(tracks, truth, options);
       std::cout << "tracks:\n" << dps::EvaluationTable(r.positions);
-      std::printf("velocity error median %.3f m/s; %d objects tracked, %d identity switches\n",
-                  r.positions.overall.MedianVelocityError(), r.objects_tracked, r.id_switches);
+      const dps::BandScore& o = r.positions.overall;
+      std::printf("velocity error median %.3f m/s (moving objects: median %.3f, 90th percentile %.3f m/s, %zu "
+                  "matches); %d objects tracked, %d identity switches\n",
+                  o.MedianVelocityError(), o.MedianMovingVelocityError(), o.MovingVelocityErrorP90(),
+                  o.moving_velocity_errors_mps.size(), r.objects_tracked, r.id_switches);
       tracks_json = ", \"tracks\": " + dps::EvaluationJson(r.positions) + ", \"id_switches\": " + std::to_string(r.id_switches);
       if (errors.empty()) errors = dps::ScoringErrorsCsv(r.positions);
     }

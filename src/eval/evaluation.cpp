@@ -172,7 +172,8 @@ void Match(FrameMatch* m) {
 
 // Recall and range errors of the counted objects, overall, by the band and zone of their near
 // point and by their kind.
-void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, EvaluationResult* result) {
+void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, double moving_speed_mps,
+                  EvaluationResult* result) {
   for (size_t i = 0; i < m.objects.size(); ++i) {
     const TruthRow& object = *m.objects[i];
     const Eigen::Vector2d near = NearPoint(object);
@@ -188,7 +189,10 @@ void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, Evaluatio
       const double error = std::abs(d.range_m - range);
       b->range_errors_m.push_back(error);
       b->relative_errors.push_back(error / std::max(range, 1e-6));
-      if (d.has_velocity) b->velocity_errors_mps.push_back(std::hypot(d.vx_mps - object.vx_mps, d.vz_mps - object.vz_mps));
+      if (!d.has_velocity) continue;
+      const double velocity_error = std::hypot(d.vx_mps - object.vx_mps, d.vz_mps - object.vz_mps);
+      b->velocity_errors_mps.push_back(velocity_error);
+      if (std::hypot(object.vx_mps, object.vz_mps) >= moving_speed_mps) b->moving_velocity_errors_mps.push_back(velocity_error);
     }
   }
 }
@@ -279,7 +283,7 @@ EvaluationResult EvaluateCounted(const std::vector<Detection>& detections, const
     }
     if (!m.dets.empty()) ++result.frames_with_detections;
     Match(&m);
-    ScoreObjects(f, m, length, &result);
+    ScoreObjects(f, m, length, options.moving_speed_mps, &result);
     const auto lanes = options.truth_lanes.find(f);
     ScoreDetections(f, m, length, lanes == options.truth_lanes.end() ? nullptr : &lanes->second, &result);
   }
@@ -294,6 +298,8 @@ double BandScore::MedianRangeError() const { return Quantile(range_errors_m, 0.5
 double BandScore::RangeErrorP90() const { return Quantile(range_errors_m, 0.9); }
 double BandScore::MedianRelativeRangeError() const { return Quantile(relative_errors, 0.5); }
 double BandScore::MedianVelocityError() const { return Quantile(velocity_errors_mps, 0.5); }
+double BandScore::MedianMovingVelocityError() const { return Quantile(moving_velocity_errors_mps, 0.5); }
+double BandScore::MovingVelocityErrorP90() const { return Quantile(moving_velocity_errors_mps, 0.9); }
 double AttributeScore::Accuracy() const { return judged ? double(correct) / judged : std::nan(""); }
 
 std::string ExpectedClass(const std::string& kind) {
@@ -440,7 +446,10 @@ std::string EvaluationJson(const EvaluationResult& r) {
         << ", \"range_error_median_m\": " << Number(b.MedianRangeError(), 4)
         << ", \"range_error_p90_m\": " << Number(b.RangeErrorP90(), 4)
         << ", \"range_error_median_relative\": " << Number(b.MedianRelativeRangeError(), 4)
-        << ", \"velocity_error_median_mps\": " << Number(b.MedianVelocityError(), 4) << "}";
+        << ", \"velocity_error_median_mps\": " << Number(b.MedianVelocityError(), 4)
+        << ", \"moving_velocity_matches\": " << b.moving_velocity_errors_mps.size()
+        << ", \"moving_velocity_error_median_mps\": " << Number(b.MedianMovingVelocityError(), 4)
+        << ", \"moving_velocity_error_p90_mps\": " << Number(b.MovingVelocityErrorP90(), 4) << "}";
   };
   out << "{\n  \"overall\": ";
   band(r.overall);
@@ -540,6 +549,7 @@ void EvaluationOptions::Check() const {
   Require(max_range_m > 0 && max_range_m <= 1000, "max_range_m", max_range_m, "0 < range <= 1000 m");
   Require(vehicle_length_m > 0 && vehicle_length_m <= 100, "vehicle_length_m", vehicle_length_m, "0 < length <= 100 m");
   Require(frame_count >= 0, "frame_count", frame_count, ">= 0");
+  Require(moving_speed_mps >= 0, "moving_speed_mps", moving_speed_mps, ">= 0");
 }
 
 }  // namespace dps

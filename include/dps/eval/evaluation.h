@@ -44,6 +44,10 @@ struct EvaluationOptions {
   // EvaluationResult::frames, also one without truth rows or detections (on an empty road, a frame
   // without a false detection); 0: the frames with truth rows or detections. >= 0.
   int frame_count = 0;
+  // The matches' velocity errors are also given for the objects moving over the ground at least
+  // this fast (a walking pedestrian's 1.4 m/s; a parked car's 0): the error of a moving object's
+  // velocity is not drowned by the many matches of static ones. m/s, >= 0.
+  double moving_speed_mps = 0.5;
   // Optional, not DESIGN.md §5: objects and detections count only inside these sectors too (empty:
   // every direction) - for regression tests of what a pipeline does where it looks
   // (PipelineCoverage).
@@ -90,6 +94,10 @@ struct BandScore {
   std::vector<double> relative_errors;
   std::vector<double> velocity_errors_mps;  // |v_detection - v_truth| of matches with a velocity
   double MedianVelocityError() const;       // NaN when none
+  // ... of the matches whose object moves (EvaluationOptions::moving_speed_mps)
+  std::vector<double> moving_velocity_errors_mps;
+  double MedianMovingVelocityError() const;  // NaN when none
+  double MovingVelocityErrorP90() const;
 };
 
 struct SourceScore {
