@@ -170,8 +170,8 @@ void Match(FrameMatch* m) {
   }
 }
 
-// Recall and range errors of the counted objects, overall, by the band and zone of their near
-// point and by their kind.
+// Recall, range errors and velocity errors (all, and the moving objects' apart) of the counted
+// objects, overall, by the band and zone of their near point and by their kind.
 void ScoreObjects(int f, const FrameMatch& m, double vehicle_length_m, double moving_speed_mps,
                   EvaluationResult* result) {
   for (size_t i = 0; i < m.objects.size(); ++i) {
