@@ -147,7 +147,7 @@ for size in sizes:
                 row["lane_p90"] = max(row.get("lane_p90_left") or 0, row.get("lane_p90_right") or 0)
             if t:
                 row.update(track_velocity=t["overall"]["velocity_error_median_mps"],
-                           moving_velocity=t["overall"].get("moving_velocity_error_median_mps"),
+                           moving_velocity=t["overall"]["moving_velocity_error_median_mps"],
                            track_recall=t["overall"]["recall"] if t["overall"]["objects"] else None,
                            track_precision=t["overall"]["precision"] if t["overall"]["detections"] else None,
                            switches=e.get("id_switches"))
